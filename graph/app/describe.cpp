@@ -1,0 +1,286 @@
+#include "describe.hpp"
+
+#include <cctype>
+#include <cmath>
+#include <sstream>
+#include <string>
+#include <variant>
+
+#include "kg/graph/json.hpp"
+#include "kg/graph/plugin_abi.hpp"
+
+namespace kg::app {
+namespace {
+
+using graph::JsonWriter;
+using graph::ParamSpec;
+using graph::PortSpec;
+
+// Words of `text` on lines of at most `width` characters, each starting with `indent`.
+void write_wrapped(std::ostream& os, const std::string& text, const std::string& indent,
+                   std::size_t width = 100) {
+  std::istringstream words(text);
+  std::string word, line;
+  while (words >> word) {
+    if (!line.empty() && indent.size() + line.size() + 1 + word.size() > width) {
+      os << indent << line << '\n';
+      line.clear();
+    }
+    line += (line.empty() ? "" : " ") + word;
+  }
+  if (!line.empty()) os << indent << line << '\n';
+}
+
+std::string bound(double value) {
+  if (std::isinf(value)) return value < 0 ? "-inf" : "inf";
+  std::ostringstream os;
+  os << value;
+  return os.str();
+}
+
+std::string range_text(const ParamSpec& p) {
+  if (!p.min && !p.max) return "";
+  std::ostringstream os;
+  os << '[' << (p.min ? bound(*p.min) : "-inf") << ", " << (p.max ? bound(*p.max) : "inf") << ']';
+  return os.str();
+}
+
+void print_ports(std::ostream& os, const char* title, const std::vector<PortSpec>& ports, bool inputs) {
+  if (ports.empty()) return;
+  os << "  " << title << ":\n";
+  for (const PortSpec& port : ports) {
+    os << "    " << port.name << ": " << port.type;
+    if (inputs && !port.required) os << " (optional)";
+    os << '\n';
+    if (!port.doc.empty()) write_wrapped(os, port.doc, "        ");
+  }
+}
+
+void json_param_value(JsonWriter& w, const graph::ParamValue& value) {
+  std::visit(
+      [&](const auto& v) {
+        using T = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, std::vector<double>>) {
+          w.begin_array();
+          for (double x : v) w.value(x);
+          w.end_array();
+        } else {
+          w.value(v);
+        }
+      },
+      value);
+}
+
+void json_ports(JsonWriter& w, const char* key, const std::vector<PortSpec>& ports, bool inputs) {
+  w.key(key);
+  w.begin_array();
+  for (const PortSpec& port : ports) {
+    w.begin_object();
+    w.key("name");
+    w.value(port.name);
+    w.key("type");
+    w.value(port.type);
+    if (inputs) {
+      w.key("required");
+      w.value(port.required);
+    }
+    w.key("doc");
+    w.value(port.doc);
+    w.end_object();
+  }
+  w.end_array();
+}
+
+// Record labels treat {}|<> as structure; quotes and backslashes end or escape the string.
+std::string record_escape(const std::string& text) {
+  std::string out;
+  for (char c : text) {
+    if (c == '{' || c == '}' || c == '|' || c == '<' || c == '>' || c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out;
+}
+
+std::string quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + '"';
+}
+
+// Record field names: letters, digits and '_' only, so that "a:b" port references stay unambiguous.
+std::string field(const char* prefix, const std::string& port) {
+  std::string out = prefix;
+  for (char c : port) out += std::isalnum(static_cast<unsigned char>(c)) ? c : '_';
+  return out;
+}
+
+}  // namespace
+
+void print_nodes_text(std::ostream& os, const graph::Registry& registry) {
+  const std::vector<std::string> names = registry.node_type_names();
+  bool first = true;
+  for (const std::string& name : names) {
+    const graph::NodeType* type = registry.find_node(name);
+    if (type == nullptr) continue;
+    const graph::NodeSpec& spec = type->spec;
+    if (!first) os << '\n';
+    first = false;
+    os << spec.type << "  (version " << spec.version << ", " << registry.node_origin(name) << ")\n";
+    if (!spec.doc.empty()) write_wrapped(os, spec.doc, "  ");
+    print_ports(os, "inputs", spec.inputs, true);
+    print_ports(os, "outputs", spec.outputs, false);
+    if (!spec.params.empty()) {
+      os << "  params:\n";
+      for (const ParamSpec& p : spec.params) {
+        os << "    " << p.name << ": " << graph::to_string(p.type);
+        if (p.required) {
+          os << ", required";
+        } else {
+          os << " = " << graph::to_string(p.default_value);
+        }
+        if (const std::string range = range_text(p); !range.empty()) os << ", in " << range;
+        if (!p.choices.empty()) {
+          os << ", one of";
+          for (std::size_t i = 0; i < p.choices.size(); ++i) os << (i ? " | " : " ") << p.choices[i];
+        }
+        os << '\n';
+        if (!p.doc.empty()) write_wrapped(os, p.doc, "        ");
+      }
+    }
+  }
+  if (names.empty()) os << "(no node types registered)\n";
+}
+
+void print_nodes_json(std::ostream& os, const graph::Registry& registry,
+                      const std::vector<graph::LoadedPlugin>& plugins) {
+  JsonWriter w(os);
+  w.begin_object();
+  w.key("kinegraph");
+  w.value(KG_VERSION);
+  w.key("plugin_abi");
+  w.value(static_cast<std::int64_t>(graph::kPluginAbiVersion));
+  w.key("plugins");
+  w.begin_array();
+  for (const graph::LoadedPlugin& plugin : plugins) {
+    w.begin_object();
+    w.key("id");
+    w.value(plugin.id);
+    w.key("version");
+    w.value(plugin.version);
+    w.key("path");
+    w.value(plugin.path.string());
+    w.key("nodes");
+    w.value(plugin.node_count);
+    w.key("extensions");
+    w.value(plugin.extension_count);
+    w.end_object();
+  }
+  w.end_array();
+  w.key("nodes");
+  w.begin_array();
+  for (const std::string& name : registry.node_type_names()) {
+    const graph::NodeType* type = registry.find_node(name);
+    if (type == nullptr) continue;
+    const graph::NodeSpec& spec = type->spec;
+    w.begin_object();
+    w.key("type");
+    w.value(spec.type);
+    w.key("version");
+    w.value(spec.version);
+    w.key("doc");
+    w.value(spec.doc);
+    w.key("origin");
+    w.value(registry.node_origin(name));
+    json_ports(w, "inputs", spec.inputs, true);
+    json_ports(w, "outputs", spec.outputs, false);
+    w.key("params");
+    w.begin_array();
+    for (const ParamSpec& p : spec.params) {
+      w.begin_object();
+      w.key("name");
+      w.value(p.name);
+      w.key("type");
+      w.value(graph::to_string(p.type));
+      w.key("required");
+      w.value(p.required);
+      w.key("default");
+      if (p.required) {
+        w.null();
+      } else {
+        json_param_value(w, p.default_value);
+      }
+      w.key("min");
+      if (p.min) {
+        w.value(*p.min);
+      } else {
+        w.null();
+      }
+      w.key("max");
+      if (p.max) {
+        w.value(*p.max);
+      } else {
+        w.null();
+      }
+      w.key("choices");
+      w.begin_array();
+      for (const std::string& c : p.choices) w.value(c);
+      w.end_array();
+      w.key("doc");
+      w.value(p.doc);
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();  // ends the line too
+}
+
+void write_dot(std::ostream& os, const graph::Graph& graph, const graph::Registry& registry) {
+  os << "digraph " << quoted(graph.file.filename().string()) << " {\n";
+  os << "  rankdir=LR;\n";
+  os << "  label=" << quoted(graph.file.filename().string()) << "; labelloc=t;\n";
+  os << "  node [shape=record, fontname=\"Helvetica\", fontsize=11];\n";
+  os << "  edge [fontname=\"Helvetica\", fontsize=9];\n";
+  for (const graph::NodeInstance& node : graph.nodes) {
+    const graph::NodeType* type = registry.find_node(node.type);
+    std::string label = "{";
+    if (type != nullptr && !type->spec.inputs.empty()) {
+      label += "{";
+      for (std::size_t i = 0; i < type->spec.inputs.size(); ++i) {
+        const PortSpec& port = type->spec.inputs[i];
+        label += (i ? "|<" : "<") + field("i_", port.name) + "> " + record_escape(port.name) +
+                 (port.required ? "" : "?");
+      }
+      label += "}|";
+    }
+    label += record_escape(node.id) + "\\n" + record_escape(node.type);
+    if (type != nullptr && !type->spec.outputs.empty()) {
+      label += "|{";
+      for (std::size_t i = 0; i < type->spec.outputs.size(); ++i) {
+        const PortSpec& port = type->spec.outputs[i];
+        label += (i ? "|<" : "<") + field("o_", port.name) + "> " + record_escape(port.name);
+      }
+      label += "}";
+    }
+    label += "}";
+    os << "  " << quoted(node.id) << " [label=\"" << label << "\"];\n";
+  }
+  for (const graph::Connection& c : graph.connections) {
+    std::string port_type;
+    if (const graph::NodeInstance* from = graph.find_node(c.from.node)) {
+      if (const graph::NodeType* type = registry.find_node(from->type)) {
+        if (const PortSpec* port = type->spec.find_output(c.from.port)) port_type = port->type;
+      }
+    }
+    os << "  " << quoted(c.from.node) << ':' << quoted(field("o_", c.from.port)) << ":e -> "
+       << quoted(c.to.node) << ':' << quoted(field("i_", c.to.port)) << ":w [label=" << quoted(port_type)
+       << ", tooltip=" << quoted(c.from.to_string() + " -> " + c.to.to_string()) << "];\n";
+  }
+  os << "}\n";
+}
+
+}  // namespace kg::app

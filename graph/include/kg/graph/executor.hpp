@@ -1,0 +1,54 @@
+// Runs a loaded Graph. Each run owns its values (the Graph is never modified); nodes run in a
+// topological order, independent branches in parallel on up to `jobs` threads. A node that
+// throws is reported with its id and message; nodes downstream of it are skipped; the others
+// still run.
+//
+//   RunResult result = run_graph(graph, registry, {.jobs = 2});
+//   write_report_json("report.json", graph, result);
+#pragma once
+
+#include <chrono>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "kg/graph/graph.hpp"
+#include "kg/graph/node.hpp"
+
+namespace kg::graph {
+
+enum class NodeStatus { Ok, Failed, Skipped };
+const char* to_string(NodeStatus status);
+
+struct NodeRun {
+  std::string id;
+  std::string type;
+  NodeStatus status = NodeStatus::Skipped;
+  std::string message;    // the failure's message, or which failed node caused the skip
+  double wall_seconds = 0;
+  std::vector<std::pair<std::string, Figure>> figures;  // in the order reported
+};
+
+struct RunResult {
+  bool ok = true;                 // every node Ok
+  double wall_seconds = 0;
+  std::vector<NodeRun> nodes;     // in the graph's node order
+  // Values of every output port of nodes that ran, keyed "node.port" (for tests and tools).
+  std::map<std::string, Value> outputs;
+};
+
+struct RunOptions {
+  int jobs = 1;  // threads; values < 1 mean 1
+  // Called with (node id, message) for node log lines and failures; default prints to stderr.
+  std::function<void(const std::string&, const std::string&)> on_log{};
+};
+
+RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options = {});
+
+// {"graph": ..., "ok": ..., "wall_seconds": ..., "nodes": [{"id","type","status","message",
+//  "wall_seconds","figures":{...}}]}, written atomically.
+void write_report_json(const std::filesystem::path& file, const Graph& graph, const RunResult& result);
+
+}  // namespace kg::graph

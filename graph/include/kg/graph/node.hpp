@@ -1,0 +1,76 @@
+// A node type: its spec and a factory making configured nodes. A node is built once per graph
+// from its checked params and keeps no per-run state: run() is const and may run concurrently
+// for several runs (DESIGN.md 1). Everything of one run goes through the RunContext.
+//
+//   class Scale final : public Node {
+//    public:
+//     explicit Scale(const Params& p) : factor_(p.get<double>("factor")) {}
+//     void run(RunContext& ctx) const override {
+//       ctx.set_output("out", Value::make(ctx.input<double>("in") * factor_));
+//       ctx.report("factor", factor_);
+//     }
+//    private:
+//     double factor_;
+//   };
+//   registry.add_node({spec, [](const Params& p) { return std::make_unique<Scale>(p); }});
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <string>
+#include <variant>
+
+#include "kg/graph/node_spec.hpp"
+#include "kg/graph/params.hpp"
+#include "kg/graph/value.hpp"
+
+namespace kg::graph {
+
+// A figure a node reports for --report (iterations, worst violation, frames read, ...).
+using Figure = std::variant<bool, std::int64_t, double, std::string>;
+
+class RunContext {
+ public:
+  virtual ~RunContext() = default;
+
+  virtual const std::string& node_id() const = 0;
+  virtual const Params& params() const = 0;
+
+  // The value on an input port; an empty Value when an optional input is not connected.
+  virtual const Value& input_value(const std::string& port) const = 0;
+  virtual void set_output(const std::string& port, Value value) = 0;
+  virtual void report(const std::string& key, Figure value) = 0;
+  // A line for the user (stderr, prefixed with the node id).
+  virtual void log(const std::string& message) = 0;
+
+  bool has_input(const std::string& port) const { return !input_value(port).empty(); }
+
+  template <Named T>
+  const T& input(const std::string& port) const {
+    return input_value(port).get<T>();
+  }
+  template <Named T>
+  void output(const std::string& port, T value) {
+    set_output(port, Value::make(std::move(value)));
+  }
+};
+
+class Node {
+ public:
+  virtual ~Node() = default;
+  // Throws on failure; the executor reports the message with the node id.
+  virtual void run(RunContext& ctx) const = 0;
+};
+
+// Builds a node from checked params (defaults filled in). May throw std::exception for a
+// combination of params the spec cannot express; the loader reports it with the node's place.
+using NodeFactory = std::function<std::unique_ptr<Node>(const Params&)>;
+
+struct NodeType {
+  NodeSpec spec;
+  NodeFactory create;
+};
+
+}  // namespace kg::graph

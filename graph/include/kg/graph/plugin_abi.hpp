@@ -1,0 +1,52 @@
+// The one header a plugin needs. A plugin is a shared library exporting, through Boost.DLL,
+//   kg_plugin_abi_version : std::uint32_t()      read first, must equal kPluginAbiVersion
+//   kg_plugin_entry       : PluginRecord()       id, version, node types and extensions
+// Both come from one macro:
+//
+//   static kg::graph::PluginRecord make_record() {
+//     kg::graph::PluginRecord r{"kg.lowpass", "1.0.0"};
+//     r.nodes.push_back(lowpass_node_type());
+//     return r;
+//   }
+//   KG_PLUGIN(make_record)
+//
+// The record crosses the library boundary as C++ (std::string, std::function): host and plugin
+// must be built by the same compiler and standard library against the same kg::graph; the ABI
+// version changes whenever these headers change layout. No static-initialiser registration.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <boost/dll/alias.hpp>
+
+#include "kg/graph/node.hpp"
+#include "kg/graph/registry.hpp"
+
+namespace kg::graph {
+
+inline constexpr std::uint32_t kPluginAbiVersion = 1;
+
+struct PluginRecord {
+  std::string id;       // unique, e.g. "kg.lowpass"
+  std::string version;  // the plugin's own version, e.g. "1.0.0"
+  std::vector<NodeType> nodes{};
+  std::vector<Extension> extensions{};
+};
+
+using PluginAbiVersionFn = std::uint32_t();
+using PluginEntryFn = PluginRecord();
+
+inline constexpr const char* kPluginAbiSymbol = "kg_plugin_abi_version";
+inline constexpr const char* kPluginEntrySymbol = "kg_plugin_entry";
+
+}  // namespace kg::graph
+
+#define KG_PLUGIN(record_function)                                                          \
+  namespace kg_plugin_exports {                                                             \
+  inline std::uint32_t abi_version() { return ::kg::graph::kPluginAbiVersion; }             \
+  inline ::kg::graph::PluginRecord entry() { return record_function(); }                    \
+  }                                                                                         \
+  BOOST_DLL_ALIAS(kg_plugin_exports::abi_version, kg_plugin_abi_version)                    \
+  BOOST_DLL_ALIAS(kg_plugin_exports::entry, kg_plugin_entry)

@@ -1,0 +1,45 @@
+// Graph files. Format (version 1):
+//
+//   version: 1
+//   doc: Converts a clip to BVH.
+//   variables:                        # set with --set name=value; ${name} anywhere in a string
+//     input:  {doc: "a .bvh or .amc file", required: true}
+//     output: {doc: "the .bvh to write", default: "out/converted.bvh"}
+//   plugins: [kg_lowpass]             # names or paths (see plugin_loader.hpp)
+//   nodes:
+//     src: {type: io.import_motion, params: {path: "${input}"}}
+//     out: {type: io.export_bvh, params: {path: "${output}"}}
+//   connections:
+//     - {from: src.motion, to: out.motion}
+//
+// Everything is checked before anything runs; every Error names file:line:column and the names
+// involved (unknown key by dotted path, unknown node type with the nearest name, unknown port,
+// type mismatch "expected X, got Y from a.b", unconnected required input, two connections into
+// one input, cycle listed, param of wrong type or out of range, undefined variable, unsupported
+// version, an output path equal to an input path).
+#pragma once
+
+#include <filesystem>
+#include <map>
+#include <string>
+
+#include "kg/graph/graph.hpp"
+#include "kg/graph/registry.hpp"
+
+namespace kg::graph {
+
+inline constexpr int kGraphFormatVersion = 1;
+
+// Reads the `plugins:` entries of a graph file (after substituting variables) without needing
+// its node types: the CLI loads them before load_graph. Throws Error as load_graph does.
+std::vector<std::string> read_graph_plugins(const std::filesystem::path& file,
+                                            const std::map<std::string, std::string>& overrides);
+
+// Loads and validates. `overrides` are --set values; one naming no declared variable is an
+// Error. Node objects are created through `registry`.
+Graph load_graph(const std::filesystem::path& file, const Registry& registry,
+                 const std::map<std::string, std::string>& overrides = {});
+Graph load_graph_from_string(const std::string& text, const std::string& file_name, const Registry& registry,
+                             const std::map<std::string, std::string>& overrides = {});
+
+}  // namespace kg::graph

@@ -1,0 +1,84 @@
+#include "kg/graph/atomic_file.hpp"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <exception>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+namespace kg::graph {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Unique within the machine for this process's lifetime: several threads or processes may write
+// beside the same target at once.
+fs::path temporary_beside(const fs::path& target) {
+  static std::atomic<unsigned long> counter{0};
+  std::string name = ".";
+  name += target.filename().string();
+  name += ".tmp.";
+  name += std::to_string(::getpid());
+  name += '.';
+  name += std::to_string(counter.fetch_add(1));
+  return target.parent_path() / name;
+}
+
+void remove_quietly(const fs::path& p) {
+  std::error_code ec;
+  fs::remove(p, ec);
+}
+
+}  // namespace
+
+void write_file_atomically(const fs::path& target, const std::function<void(std::ostream&)>& write) {
+  const std::string what = "cannot write '" + target.string() + "'";
+  if (target.empty() || !target.has_filename()) throw std::runtime_error(what + ": not a file name");
+
+  std::error_code ec;
+  if (target.has_parent_path()) {
+    fs::create_directories(target.parent_path(), ec);
+    if (ec)
+      throw std::runtime_error(what + ": cannot create directory '" + target.parent_path().string() +
+                               "': " + ec.message());
+  }
+  if (fs::is_directory(target, ec)) throw std::runtime_error(what + ": it is a directory");
+
+  const fs::path temp = temporary_beside(target);
+  try {
+    std::ofstream os(temp, std::ios::binary | std::ios::trunc);
+    if (!os) throw std::runtime_error(what + ": cannot create temporary file '" + temp.string() + "'");
+    try {
+      write(os);
+    } catch (const std::exception& e) {
+      os.close();
+      remove_quietly(temp);
+      std::throw_with_nested(std::runtime_error(what + ": " + e.what()));
+    } catch (...) {
+      os.close();
+      remove_quietly(temp);
+      std::throw_with_nested(std::runtime_error(what + ": unknown error"));
+    }
+    os.flush();
+    if (!os) throw std::runtime_error(what + ": write error (disk full?)");
+    os.close();
+    if (os.fail()) throw std::runtime_error(what + ": error closing the temporary file");
+
+    // Keep the permissions of a file being replaced.
+    if (fs::exists(target, ec)) {
+      const auto perms = fs::status(target, ec).permissions();
+      if (!ec) fs::permissions(temp, perms, ec);
+    }
+    fs::rename(temp, target, ec);
+    if (ec) throw std::runtime_error(what + ": rename from '" + temp.string() + "' failed: " + ec.message());
+  } catch (...) {
+    remove_quietly(temp);
+    throw;
+  }
+}
+
+}  // namespace kg::graph

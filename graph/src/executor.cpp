@@ -1,0 +1,310 @@
+#include "kg/graph/executor.hpp"
+
+#include <algorithm>
+#include <condition_variable>
+#include <exception>
+#include <iostream>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "kg/graph/atomic_file.hpp"
+#include "kg/graph/json.hpp"
+
+namespace kg::graph {
+
+const char* to_string(NodeStatus status) {
+  switch (status) {
+    case NodeStatus::Ok:
+      return "ok";
+    case NodeStatus::Failed:
+      return "failed";
+    case NodeStatus::Skipped:
+      return "skipped";
+  }
+  return "?";
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using LogFn = std::function<void(const std::string&, const std::string&)>;
+
+double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
+
+std::string port_names(const std::vector<PortSpec>& ports) {
+  std::string s;
+  for (const PortSpec& p : ports) s += (s.empty() ? "" : ", ") + p.name;
+  return s.empty() ? "none" : s;
+}
+
+// One node's view of one run: its inputs (read-only, shared with other consumers) and what it
+// produces. Lives on the worker's stack while the node runs.
+class Context final : public RunContext {
+ public:
+  Context(const NodeInstance& node, const NodeSpec& spec, std::map<std::string, Value> inputs,
+          std::shared_ptr<const void> owner, const LogFn& log)
+      : node_(node), spec_(spec), inputs_(std::move(inputs)), owner_(std::move(owner)), log_(log) {}
+
+  const std::string& node_id() const override { return node_.id; }
+  const Params& params() const override { return node_.params; }
+
+  const Value& input_value(const std::string& port) const override {
+    static const Value none;
+    if (!spec_.find_input(port))
+      throw Error("node '" + node_.id + "' (" + node_.type + ") read input '" + port +
+                  "', which its type does not declare (inputs: " + port_names(spec_.inputs) + ")");
+    auto it = inputs_.find(port);
+    return it == inputs_.end() ? none : it->second;
+  }
+
+  void set_output(const std::string& port, Value value) override {
+    const PortSpec* out = spec_.find_output(port);
+    if (!out)
+      throw Error("node '" + node_.id + "' (" + node_.type + ") set output '" + port +
+                  "', which its type does not declare (outputs: " + port_names(spec_.outputs) + ")");
+    if (value.empty()) throw Error("node '" + node_.id + "' set output '" + port + "' to an empty value");
+    if (value.type_name() != out->type)
+      throw Error("output " + node_.id + "." + port + " is declared " + out->type + ", but the node set a " +
+                  value.type_name());
+    outputs_[port] = owner_ ? value.kept_alive_by(owner_) : std::move(value);
+  }
+
+  void report(const std::string& key, Figure value) override {
+    for (auto& [k, v] : figures_)
+      if (k == key) {
+        v = std::move(value);
+        return;
+      }
+    figures_.emplace_back(key, std::move(value));
+  }
+
+  void log(const std::string& message) override { log_(node_.id, message); }
+
+  std::map<std::string, Value>& outputs() { return outputs_; }
+  std::vector<std::pair<std::string, Figure>>& figures() { return figures_; }
+
+ private:
+  const NodeInstance& node_;
+  const NodeSpec& spec_;
+  std::map<std::string, Value> inputs_;
+  std::shared_ptr<const void> owner_;
+  const LogFn& log_;
+  std::map<std::string, Value> outputs_;
+  std::vector<std::pair<std::string, Figure>> figures_;
+};
+
+struct Input {
+  std::string port;
+  std::size_t from;
+  std::string from_port;
+};
+
+}  // namespace
+
+RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options) {
+  const auto t0 = Clock::now();
+  const std::size_t n = graph.nodes.size();
+
+  std::map<std::string, std::size_t> index;
+  for (std::size_t i = 0; i < n; ++i) index[graph.nodes[i].id] = i;
+  std::vector<std::vector<std::size_t>> downstream(n);
+  std::vector<std::vector<Input>> inputs(n);
+  std::vector<std::size_t> pending(n, 0);
+  for (const Connection& c : graph.connections) {
+    auto from = index.find(c.from.node), to = index.find(c.to.node);
+    if (from == index.end() || to == index.end())
+      throw Error(
+          "connection " + c.from.to_string() + " -> " + c.to.to_string() + " names a node not in the graph",
+          c.where);
+    downstream[from->second].push_back(to->second);
+    inputs[to->second].push_back({c.to.port, from->second, c.from.port});
+    ++pending[to->second];
+  }
+  graph.topological_order();  // throws for a cycle, which would otherwise never finish
+
+  std::mutex log_mutex;
+  const LogFn log = [&](const std::string& id, const std::string& message) {
+    std::lock_guard<std::mutex> lock(log_mutex);
+    if (!options.on_log) {
+      std::cerr << '[' << id << "] " << message << '\n';
+      return;
+    }
+    // A throwing log callback must not take a worker thread (and the process) down.
+    try {
+      options.on_log(id, message);
+    } catch (const std::exception& e) {
+      std::cerr << '[' << id << "] " << message << " (log callback failed: " << e.what() << ")\n";
+    } catch (...) {
+      std::cerr << '[' << id << "] " << message << " (log callback failed)\n";
+    }
+  };
+
+  RunResult result;
+  result.nodes.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    result.nodes[i].id = graph.nodes[i].id;
+    result.nodes[i].type = graph.nodes[i].type;
+  }
+  std::vector<std::map<std::string, Value>> produced(n);
+  std::vector<std::vector<std::string>> failed_upstream(n);  // the failed nodes that make a node skip
+
+  std::mutex mutex;
+  std::condition_variable changed;
+  std::set<std::size_t> ready;  // ordered: file order among ready nodes
+  std::size_t finished = 0;
+  for (std::size_t i = 0; i < n; ++i)
+    if (pending[i] == 0) ready.insert(i);
+
+  // Runs node i outside the lock. Only this worker touches result.nodes[i] meanwhile.
+  auto execute = [&](std::size_t i, std::map<std::string, Value> values) {
+    const NodeInstance& inst = graph.nodes[i];
+    NodeRun& run = result.nodes[i];
+    const NodeType* type = registry.find_node(inst.type);
+    if (!type) {
+      run.status = NodeStatus::Failed;
+      run.message = "node type '" + inst.type + "' is not registered";
+      return;
+    }
+    const auto start = Clock::now();
+    try {
+      NodePtr node = inst.node ? inst.node : registry.create_node(inst.type, inst.params);
+      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log);
+      node->run(ctx);
+      produced[i] = std::move(ctx.outputs());
+      run.figures = std::move(ctx.figures());
+      run.status = NodeStatus::Ok;
+    } catch (const std::exception& e) {
+      run.status = NodeStatus::Failed;
+      run.message = e.what();
+    } catch (...) {
+      run.status = NodeStatus::Failed;
+      run.message = "unknown exception (not derived from std::exception)";
+    }
+    run.wall_seconds = seconds_since(start);
+  };
+
+  auto worker = [&] {
+    std::unique_lock<std::mutex> lock(mutex);
+    while (true) {
+      changed.wait(lock, [&] { return !ready.empty() || finished == n; });
+      if (ready.empty()) return;
+      const std::size_t i = *ready.begin();
+      ready.erase(ready.begin());
+      NodeRun& run = result.nodes[i];
+
+      // Upstream results are final once a node is ready: decide here whether it can run.
+      std::vector<std::string>& causes = failed_upstream[i];
+      std::map<std::string, Value> values;
+      std::string missing;
+      for (const Input& in : inputs[i]) {
+        const NodeRun& up = result.nodes[in.from];
+        if (up.status == NodeStatus::Failed) {
+          causes.push_back(up.id);
+        } else if (up.status == NodeStatus::Skipped) {
+          causes.insert(causes.end(), failed_upstream[in.from].begin(), failed_upstream[in.from].end());
+        } else if (auto it = produced[in.from].find(in.from_port); it != produced[in.from].end()) {
+          values[in.port] = it->second;
+        } else if (missing.empty()) {
+          missing = "input " + graph.nodes[i].id + "." + in.port + " not produced by " + up.id + "." +
+                    in.from_port + " (node '" + up.id + "' ran but did not set that output)";
+        }
+      }
+      if (!causes.empty()) {
+        std::vector<std::string> unique;
+        for (const std::string& c : causes)
+          if (std::find(unique.begin(), unique.end(), c) == unique.end()) unique.push_back(c);
+        causes = unique;
+        run.status = NodeStatus::Skipped;
+        run.message = "not run: upstream node" + std::string(causes.size() > 1 ? "s" : "") + " ";
+        for (std::size_t k = 0; k < causes.size(); ++k) run.message += (k ? ", '" : "'") + causes[k] + "'";
+        run.message += " failed";
+      } else if (!missing.empty()) {
+        run.status = NodeStatus::Failed;
+        run.message = missing;
+        lock.unlock();
+        log(run.id, "failed: " + missing);
+        lock.lock();
+      } else {
+        lock.unlock();
+        execute(i, std::move(values));
+        if (run.status == NodeStatus::Failed) log(run.id, "failed: " + run.message);
+        lock.lock();
+      }
+      ++finished;
+      for (std::size_t j : downstream[i])
+        if (--pending[j] == 0) ready.insert(j);
+      changed.notify_all();
+    }
+  };
+
+  const std::size_t threads =
+      std::min<std::size_t>(static_cast<std::size_t>(std::max(1, options.jobs)), std::max<std::size_t>(1, n));
+  std::vector<std::thread> pool;
+  for (std::size_t t = 1; t < threads; ++t) {
+    try {
+      pool.emplace_back(worker);
+    } catch (const std::system_error&) {
+      break;  // fewer threads than asked: still correct, only slower
+    }
+  }
+  worker();
+  for (std::thread& t : pool) t.join();
+
+  for (std::size_t i = 0; i < n; ++i) {
+    if (result.nodes[i].status != NodeStatus::Ok) result.ok = false;
+    if (result.nodes[i].status == NodeStatus::Skipped) continue;
+    for (auto& [port, value] : produced[i]) result.outputs[graph.nodes[i].id + "." + port] = std::move(value);
+  }
+  result.wall_seconds = seconds_since(t0);
+  return result;
+}
+
+void write_report_json(const std::filesystem::path& file, const Graph& graph, const RunResult& result) {
+  write_file_atomically(file, [&](std::ostream& os) {
+    JsonWriter w(os);
+    w.begin_object();
+    w.key("graph");
+    w.value(graph.file.string());
+    w.key("ok");
+    w.value(result.ok);
+    w.key("wall_seconds");
+    w.value(result.wall_seconds);
+    w.key("variables");
+    w.begin_object();
+    for (const auto& [name, value] : graph.values) {
+      w.key(name);
+      w.value(value);
+    }
+    w.end_object();
+    w.key("nodes");
+    w.begin_array();
+    for (const NodeRun& run : result.nodes) {
+      w.begin_object();
+      w.key("id");
+      w.value(run.id);
+      w.key("type");
+      w.value(run.type);
+      w.key("status");
+      w.value(to_string(run.status));
+      w.key("message");
+      w.value(run.message);
+      w.key("wall_seconds");
+      w.value(run.wall_seconds);
+      w.key("figures");
+      w.begin_object();
+      for (const auto& [key, figure] : run.figures) {
+        w.key(key);
+        std::visit([&](const auto& v) { w.value(v); }, figure);
+      }
+      w.end_object();
+      w.end_object();
+    }
+    w.end_array();
+    w.end_object();
+  });
+}
+
+}  // namespace kg::graph

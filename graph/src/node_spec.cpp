@@ -1,0 +1,26 @@
+#include "kg/graph/node_spec.hpp"
+
+namespace kg::graph {
+
+namespace {
+
+template <class Spec>
+const Spec* find_named(const std::vector<Spec>& list, const std::string& name) {
+  for (const Spec& s : list)
+    if (s.name == name) return &s;
+  return nullptr;
+}
+
+}  // namespace
+
+const PortSpec* NodeSpec::find_input(const std::string& name) const {
+  return find_named(inputs, name);
+}
+const PortSpec* NodeSpec::find_output(const std::string& name) const {
+  return find_named(outputs, name);
+}
+const ParamSpec* NodeSpec::find_param(const std::string& name) const {
+  return find_named(params, name);
+}
+
+}  // namespace kg::graph

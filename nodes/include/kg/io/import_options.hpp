@@ -1,0 +1,72 @@
+// What every motion importer takes from a user, because real files lie about their units, up
+// axis and frame rate (../shared/data/README.md). Importers read a file in its own units and
+// axes, then call apply_import_options to bring the clip to skeleton.hpp's conventions.
+//
+//   ImportOptions opt{.units = "auto", .up = "auto", .fps = 0};
+//   std::vector<std::string> notes = apply_import_options(motion, opt, file_fps, "walk.bvh");
+//   // notes: {"walk.bvh: units auto: standing height 172.3 file units, taken as cm (1.72 m)"}
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "kg/graph/node_spec.hpp"
+#include "kg/motion/motion.hpp"
+
+namespace kg::io {
+
+struct ImportOptions {
+  // auto | m | cm | mm | inch | asf (ASF's default `length 0.45` inches unit, 2.54/45 m).
+  // auto: the file's own declaration when it has one (ASF :units), else guessed from standing
+  // height, and said so in the notes.
+  std::string units = "auto";
+  // auto | y | z: which file axis points up; auto guesses from the posed figure's extents
+  // (the rule: apply_import_options below).
+  std::string up = "auto";
+  // Frames per second overriding the file's header; 0 keeps the file's.
+  double fps = 0;
+};
+
+// Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.
+double metres_per_unit(const std::string& units);
+
+// The params every importer node declares for ImportOptions (units, up, fps), and reading them.
+std::vector<graph::ParamSpec> import_option_params(const std::string& default_units = "auto");
+ImportOptions import_options_from(const graph::Params& params);
+
+// Brings `motion`, read in its file's units and axes (lengths in file units, file_to_world
+// identity, angles already radians), to skeleton.hpp's conventions, in place:
+//   - units: OFFSETs, End Sites, position channel values and position channel limits are
+//     multiplied by the unit's metres; skeleton->source_unit_metres is set to it. `auto` takes
+//     `declared_metres_per_unit` when > 0 (a unit the file states, as ASF's :units), else the
+//     named unit (m, cm, mm, inch, asf) that makes the standing height closest to 1.7 m,
+//     preferring those giving 1.0..2.3 m. Standing height = the larger of the extents along
+//     the up axis of joints and End Sites in the rest pose (OFFSETs only) and in frame 0.
+//   - up: `z` sets file_to_world to the right-handed rotation taking +Z to +Y (-90 deg about
+//     X: (x, y, z) -> (x, z, -y)); `y` keeps the identity. `auto` takes the extents along Y and
+//     Z of joints and End Sites in 9 frames spread evenly over the clip (frame 0 and the last
+//     included; the rest pose when there is no frame), their medians over those frames, and
+//     picks z when Z's median exceeds Y's by more than 20 %, else y (BVH's usual convention,
+//     also when undecided). Posed frames rather than the rest pose, because files rotate their
+//     root (iClone's Z-up rig under a -90 deg root) or orient bones along X (Bandai): the posed
+//     figure is what a viewer shows; a median, because a single pose (arms reaching forward)
+//     can be as deep as it is tall.
+//   - fps: options.fps when > 0, else file_fps (which must then be > 0).
+// Channel values other than position channels are not touched: file_to_world sits above the
+// roots, so channels stay in file coordinates and exporters write them back unchanged.
+// Returns notes for the user, each starting with "file_name: ", saying what auto chose (and
+// from what), a fps override, or an implausible height. The skeleton is replaced by a
+// converted copy (the old one may be shared). Throws std::invalid_argument on a bad option
+// name, fps < 0, or no fps at all.
+std::vector<std::string> apply_import_options(motion::Motion& motion, const ImportOptions& options,
+                                              double file_fps, const std::string& file_name,
+                                              double declared_metres_per_unit = 0);
+
+// "m", "cm", "mm", "inch" or "asf" when `metres_per_unit` is one of those (to 1e-9 relative),
+// else the number of metres ("0.0078125 m"). For messages and reports.
+std::string unit_name(double metres_per_unit);
+
+// "y" for an identity file_to_world, "z" for apply_import_options' Z-up rotation, else "custom".
+std::string up_axis_name(const Eigen::Matrix3d& file_to_world);
+
+}  // namespace kg::io

@@ -1,0 +1,35 @@
+// A clip: a skeleton (shared, immutable) and a frames x channels matrix of values at a
+// constant frame rate. Values follow skeleton.hpp's conventions: metres and radians.
+//
+//   Motion m{skeleton, Eigen::MatrixXd::Zero(frames, skeleton->channel_count()), 120.0};
+//   double hip_y = m.values(f, m.skeleton->joint(0).first_channel + 1);
+#pragma once
+
+#include <memory>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "kg/graph/value.hpp"
+#include "kg/motion/skeleton.hpp"
+
+namespace kg::motion {
+
+using FrameMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
+
+struct Motion {
+  std::shared_ptr<const Skeleton> skeleton;
+  FrameMatrix values;  // frames x skeleton->channel_count()
+  double fps = 30.0;   // frames per second
+  std::string name;    // e.g. the source file's stem
+
+  int frame_count() const { return static_cast<int>(values.rows()); }
+  double duration() const { return frame_count() > 1 ? (frame_count() - 1) / fps : 0.0; }
+  // Throws std::invalid_argument when sizes disagree, fps is not positive, or a value is not finite.
+  void check() const;
+};
+
+}  // namespace kg::motion
+
+KG_DECLARE_TYPE(kg::motion::Skeleton, "kg.Skeleton")
+KG_DECLARE_TYPE(kg::motion::Motion, "kg.Motion")

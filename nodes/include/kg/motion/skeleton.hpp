@@ -1,0 +1,87 @@
+// An articulated figure: a forest of joints (usually one root), each with a rest offset from its
+// parent, an optional fixed axis frame, and its channels (degrees of freedom) in any order.
+//
+// Conventions (every importer converts to these; exporters convert back):
+//   - lengths in metres, angles in radians;
+//   - a joint's local transform is
+//       T(offset, with position channels replacing the matching offset component)
+//       * axis * R(c0) * R(c1) * ... * axis^T
+//     where c0, c1, ... are its rotation channels in the order listed (BVH's convention: the
+//     first listed rotation is the outermost), and `axis` is identity except for ASF bones;
+//   - world = file_to_world * (chain of local transforms). file_to_world is a rotation that
+//     makes +Y up in the world (identity for Y-up files); exporters write file coordinates.
+//
+//   Skeleton s;
+//   int hip = s.add_joint({.name = "hip", .parent = -1, .channels = {Channel::Xposition, ...}});
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Geometry>
+
+namespace kg::motion {
+
+enum class ChannelKind : std::uint8_t { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
+
+inline bool is_rotation(ChannelKind k) { return k >= ChannelKind::Xrotation; }
+// 0, 1, 2 for X, Y, Z.
+inline int axis_index(ChannelKind k) { return static_cast<int>(k) % 3; }
+// "Xposition", ..., "Zrotation" (BVH names).
+const char* to_string(ChannelKind k);
+std::optional<ChannelKind> channel_kind_from_string(const std::string& bvh_name);
+
+struct Channel {
+  ChannelKind kind = ChannelKind::Xrotation;
+  // Joint limits, in the channel's unit (metres or radians); infinite when unlimited.
+  double min = -std::numeric_limits<double>::infinity();
+  double max = std::numeric_limits<double>::infinity();
+};
+
+struct Joint {
+  std::string name;
+  int parent = -1;                                    // index of the parent joint, -1 for a root
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();   // metres, in the parent's frame
+  Eigen::Matrix3d axis = Eigen::Matrix3d::Identity(); // ASF `axis`: the frame channels rotate in
+  std::vector<Channel> channels;
+  int first_channel = 0;                              // index of channels[0] in a frame's values
+  // Tips: BVH "End Site" offsets (metres, this joint's frame). Usually zero or one.
+  std::vector<Eigen::Vector3d> end_sites;
+};
+
+class Skeleton {
+ public:
+  // Appends a joint; its parent must already exist. Sets first_channel. Returns its index.
+  // Throws std::invalid_argument on a bad parent or a duplicate name.
+  int add_joint(Joint joint);
+
+  const std::vector<Joint>& joints() const { return joints_; }
+  const Joint& joint(int index) const { return joints_[static_cast<std::size_t>(index)]; }
+  Joint& joint_mut(int index) { return joints_[static_cast<std::size_t>(index)]; }
+  int joint_count() const { return static_cast<int>(joints_.size()); }
+  int channel_count() const { return channel_count_; }
+  // -1 when absent.
+  int find_joint(const std::string& name) const;
+  // The joint owning frame channel `channel`, and that channel's index within the joint.
+  std::pair<int, int> channel_owner(int channel) const;
+  // "hip.Xrotation".
+  std::string channel_name(int channel) const;
+
+  // Rotation taking file coordinates to world coordinates (+Y up); see above.
+  Eigen::Matrix3d file_to_world = Eigen::Matrix3d::Identity();
+  // Metres per unit of the file it came from (0.01 for cm); exporters write back in that unit.
+  double source_unit_metres = 1.0;
+
+  // Standing height estimate: vertical extent (world Y) of joints and end sites in the rest
+  // pose, metres.
+  double rest_height() const;
+
+ private:
+  std::vector<Joint> joints_;
+  int channel_count_ = 0;
+};
+
+}  // namespace kg::motion

@@ -1,0 +1,269 @@
+#include "kg/io/import_options.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <stdexcept>
+#include <utility>
+
+#include "kg/motion/kinematics.hpp"
+
+namespace kg::io {
+namespace {
+
+using motion::Skeleton;
+
+struct NamedUnit {
+  const char* name;
+  double metres;
+};
+
+// Order matters only for ties in the auto guess (none occur between these factors).
+constexpr NamedUnit kUnits[] = {
+    {"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"inch", 0.0254}, {"asf", 0.0254 / 0.45},
+};
+
+// A standing adult: what `auto` aims at, and the band it calls plausible.
+constexpr double kTypicalHeight = 1.7;
+constexpr double kPlausibleMin = 1.0;
+constexpr double kPlausibleMax = 2.3;
+// `auto` up picks z only when Z's extent exceeds Y's by this factor, and looks at this many
+// frames spread through the clip.
+constexpr double kUpMargin = 1.2;
+constexpr int kUpSamples = 9;
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+std::string fmt(const char* format, double value) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, format, value);
+  return buf;
+}
+
+// Right-handed rotation taking +Z to +Y: -90 degrees about X, (x, y, z) -> (x, z, -y).
+Eigen::Matrix3d z_up_to_y_up() {
+  Eigen::Matrix3d r;
+  r << 1, 0, 0,  //
+      0, 0, 1,   //
+      0, -1, 0;
+  return r;
+}
+
+// Min and max along each file axis of joint origins and End Sites.
+struct Extent {
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = -Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  void add(const Eigen::Vector3d& p) {
+    lo = lo.cwiseMin(p);
+    hi = hi.cwiseMax(p);
+  }
+  double along(int axis) const { return hi[axis] >= lo[axis] ? hi[axis] - lo[axis] : 0.0; }
+};
+
+// Rest pose: OFFSETs only, no channel applied (translations as the hierarchy states them).
+Extent rest_extent(const Skeleton& s) {
+  Extent e;
+  std::vector<Eigen::Vector3d> pos(static_cast<std::size_t>(s.joint_count()));
+  for (int j = 0; j < s.joint_count(); ++j) {
+    const motion::Joint& joint = s.joint(j);
+    pos[j] = joint.parent < 0 ? joint.offset : Eigen::Vector3d(pos[joint.parent] + joint.offset);
+    e.add(pos[j]);
+    for (const Eigen::Vector3d& tip : joint.end_sites) e.add(pos[j] + tip);
+  }
+  return e;
+}
+
+// One frame posed, in file coordinates (file_to_world undone).
+Extent frame_extent(const motion::Motion& m, int frame) {
+  const Skeleton& s = *m.skeleton;
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
+  motion::forward_kinematics(s, m.values.row(frame), world);
+  const Eigen::Matrix3d to_file = s.file_to_world.transpose();
+  Extent e;
+  for (int j = 0; j < s.joint_count(); ++j) {
+    e.add(to_file * world[j].translation());
+    for (const Eigen::Vector3d& tip : s.joint(j).end_sites) e.add(to_file * (world[j] * tip));
+  }
+  return e;
+}
+
+void check_units_name(const std::string& units, bool allow_auto) {
+  if (allow_auto && units == "auto") return;
+  metres_per_unit(units);
+}
+
+}  // namespace
+
+double metres_per_unit(const std::string& units) {
+  for (const NamedUnit& u : kUnits)
+    if (units == u.name) return u.metres;
+  throw std::invalid_argument("unknown units '" + units + "' (expected m, cm, mm, inch or asf)");
+}
+
+std::string unit_name(double metres) {
+  for (const NamedUnit& u : kUnits)
+    if (std::abs(metres - u.metres) <= 1e-9 * u.metres) return u.name;
+  return fmt("%.9g m", metres);
+}
+
+std::string up_axis_name(const Eigen::Matrix3d& file_to_world) {
+  if (file_to_world.isApprox(Eigen::Matrix3d::Identity(), 1e-12)) return "y";
+  if (file_to_world.isApprox(z_up_to_y_up(), 1e-12)) return "z";
+  return "custom";
+}
+
+std::vector<graph::ParamSpec> import_option_params(const std::string& default_units) {
+  check_units_name(default_units, true);
+  using graph::ParamSpec;
+  using graph::ParamType;
+  ParamSpec units{"units", ParamType::Enum, default_units,
+                  "length unit of the file: auto (the file's declaration, else guessed from the "
+                  "standing height, and said so), m, cm, mm, inch, asf (2.54/45 m, ASF's length 0.45)"};
+  units.choices = {"auto", "m", "cm", "mm", "inch", "asf"};
+  ParamSpec up{"up", ParamType::Enum, std::string("auto"),
+               "file axis pointing up: auto (from frame 0's extents, said so), y, z (rotated to +Y)"};
+  up.choices = {"auto", "y", "z"};
+  ParamSpec fps{"fps", ParamType::Float, 0.0,
+                "frames per second overriding the file's (files lie); 0 keeps the file's"};
+  fps.min = 0.0;
+  return {units, up, fps};
+}
+
+ImportOptions import_options_from(const graph::Params& params) {
+  ImportOptions o;
+  o.units = params.get<std::string>("units");
+  o.up = params.get<std::string>("up");
+  o.fps = params.get<double>("fps");
+  return o;
+}
+
+std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOptions& options,
+                                              double file_fps, const std::string& file_name,
+                                              double declared_metres_per_unit) {
+  check_units_name(options.units, true);
+  if (options.up != "auto" && options.up != "y" && options.up != "z")
+    throw std::invalid_argument("unknown up axis '" + options.up + "' (expected auto, y or z)");
+  if (!(options.fps >= 0) || !std::isfinite(options.fps))
+    throw std::invalid_argument("fps must be >= 0 (0 keeps the file's), got " + fmt("%g", options.fps));
+  if (options.fps == 0 && !(file_fps > 0 && std::isfinite(file_fps)))
+    throw std::invalid_argument(file_name + ": the file gives no frame rate; set fps");
+  if (!m.skeleton) throw std::invalid_argument(file_name + ": motion has no skeleton");
+
+  std::vector<std::string> notes;
+  const std::string prefix = file_name + ": ";
+  auto skeleton = std::make_shared<Skeleton>(*m.skeleton);
+  skeleton->file_to_world = Eigen::Matrix3d::Identity();
+  m.skeleton = skeleton;  // frame_extent reads it
+
+  const Extent rest = rest_extent(*skeleton);
+  const bool has_frames = m.frame_count() > 0;
+  const Extent posed = has_frames ? frame_extent(m, 0) : rest;
+
+  // Up axis.
+  int up = 1;
+  if (options.up == "z") {
+    up = 2;
+  } else if (options.up == "auto") {
+    // Median extents over frames spread through the clip: one pose (a dancer's arms reaching
+    // forward, a crouch) can be as deep as it is tall, most poses of a clip are not.
+    double ey = rest.along(1), ez = rest.along(2);
+    std::string pose = "the rest pose";
+    if (has_frames) {
+      const int n = m.frame_count();
+      const int samples = std::min(n, kUpSamples);
+      std::vector<double> ys, zs;
+      for (int k = 0; k < samples; ++k) {
+        const int f =
+            samples == 1 ? 0 : static_cast<int>((static_cast<long long>(n - 1) * k) / (samples - 1));
+        const Extent e = f == 0 ? posed : frame_extent(m, f);
+        ys.push_back(e.along(1));
+        zs.push_back(e.along(2));
+      }
+      ey = median(ys);
+      ez = median(zs);
+      pose = samples == 1 ? std::string("frame 0") : "the median of " + std::to_string(samples) + " frames";
+    }
+    const std::string spans =
+        pose + " spans " + fmt("%.4g", ey) + " along Y and " + fmt("%.4g", ez) + " along Z (file units)";
+    if (ez > kUpMargin * ey) {
+      up = 2;
+      notes.push_back(prefix + "up auto: " + spans + ", taken as Z up");
+    } else if (ey > kUpMargin * ez) {
+      notes.push_back(prefix + "up auto: " + spans + ", taken as Y up");
+    } else {
+      notes.push_back(prefix + "up auto: " + spans + ", undecided: taken as Y up (BVH's convention)");
+    }
+  }
+  if (up == 2) skeleton->file_to_world = z_up_to_y_up();
+
+  // Units.
+  const double height = std::max(rest.along(up), posed.along(up));
+  double mpu = 1.0;
+  if (options.units == "auto") {
+    if (declared_metres_per_unit > 0) {
+      mpu = declared_metres_per_unit;
+      notes.push_back(prefix + "units auto: the file declares " + unit_name(mpu) + " (" + fmt("%.9g", mpu) +
+                      " m per unit); standing height " + fmt("%.3f", height * mpu) + " m");
+    } else if (!(height > 0)) {
+      notes.push_back(prefix + "units auto: the figure has no height along the up axis, taken as m");
+    } else {
+      const NamedUnit* best = nullptr;
+      double best_score = std::numeric_limits<double>::infinity();
+      for (const NamedUnit& u : kUnits) {
+        const double h = height * u.metres;
+        const bool plausible = h >= kPlausibleMin && h <= kPlausibleMax;
+        const double score = std::abs(std::log(h / kTypicalHeight)) + (plausible ? 0.0 : 1e3);
+        if (score < best_score) best_score = score, best = &u;
+      }
+      mpu = best->metres;
+      const double h = height * mpu;
+      std::string note = prefix + "units auto: standing height " + fmt("%.4g", height) +
+                         " file units, taken as " + best->name + " (" + fmt("%.2f", h) + " m)";
+      if (h < kPlausibleMin || h > kPlausibleMax)
+        note += "; no unit gives a human height of " + fmt("%.1f", kPlausibleMin) + ".." +
+                fmt("%.1f", kPlausibleMax) + " m, this one comes closest: set units if it is wrong";
+      notes.push_back(note);
+    }
+  } else {
+    mpu = metres_per_unit(options.units);
+    const double h = height * mpu;
+    if (height > 0 && (h < kPlausibleMin || h > kPlausibleMax))
+      notes.push_back(prefix + "units " + options.units + ": the figure stands " + fmt("%.3g", h) +
+                      " m tall, not a human height: check the units");
+  }
+
+  skeleton->source_unit_metres = mpu;
+  if (mpu != 1.0) {
+    for (int j = 0; j < skeleton->joint_count(); ++j) {
+      motion::Joint& joint = skeleton->joint_mut(j);
+      joint.offset *= mpu;
+      for (Eigen::Vector3d& tip : joint.end_sites) tip *= mpu;
+      for (std::size_t c = 0; c < joint.channels.size(); ++c) {
+        motion::Channel& ch = joint.channels[c];
+        if (motion::is_rotation(ch.kind)) continue;
+        ch.min *= mpu;  // infinities stay infinite
+        ch.max *= mpu;
+        m.values.col(joint.first_channel + static_cast<int>(c)) *= mpu;
+      }
+    }
+  }
+
+  // Frame rate.
+  if (options.fps > 0) {
+    if (file_fps > 0)
+      notes.push_back(prefix + "fps " + fmt("%g", options.fps) + " from the options; the file says " +
+                      fmt("%.6g", file_fps));
+    m.fps = options.fps;
+  } else {
+    m.fps = file_fps;
+  }
+  return notes;
+}
+
+}  // namespace kg::io

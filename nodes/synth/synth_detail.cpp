@@ -1,0 +1,304 @@
+#include "synth_detail.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+#include <stdexcept>
+
+#include "kg/motion/rotations.hpp"
+
+namespace kg::synth::detail {
+
+// ---------------------------------------------------------------------------------------------
+// Curves
+
+void Curve::add_poly(double t0, double t1, const std::array<double, 6>& c) {
+  if (!(t1 > t0)) throw std::logic_error("synth curve: empty or reversed piece");
+  if (!pieces_.empty() && std::abs(pieces_.back().t1 - t0) > 1e-9)
+    throw std::logic_error("synth curve: pieces must be contiguous");
+  pieces_.push_back({t0, t1, c});
+}
+
+void Curve::add_hermite(double t0, double t1, double y0, double m0, double y1, double m1) {
+  const double h = t1 - t0;
+  add_poly(t0, t1,
+           {y0, m0, (3 * (y1 - y0) / h - 2 * m0 - m1) / h, (2 * (y0 - y1) / h + m0 + m1) / (h * h), 0, 0});
+}
+
+void Curve::add_quintic(double t0, double t1, double y0, double v0, double a0, double y1, double v1,
+                        double a1) {
+  const double T = t1 - t0, T2 = T * T, T3 = T2 * T;
+  const double d = y1 - y0;
+  add_poly(t0, t1,
+           {y0, v0, a0 / 2, (20 * d - (8 * v1 + 12 * v0) * T - (3 * a0 - a1) * T2) / (2 * T3),
+            (-30 * d + (14 * v1 + 16 * v0) * T + (3 * a0 - 2 * a1) * T2) / (2 * T3 * T),
+            (12 * d - 6 * (v1 + v0) * T + (a1 - a0) * T2) / (2 * T3 * T2)});
+}
+
+const Curve::Piece* Curve::find(double t) const {
+  if (pieces_.empty()) throw std::logic_error("synth curve: evaluated while empty");
+  auto it =
+      std::lower_bound(pieces_.begin(), pieces_.end(), t, [](const Piece& p, double x) { return p.t1 < x; });
+  if (it == pieces_.end()) return nullptr;
+  return &*it;
+}
+
+double Curve::value(double t) const {
+  const Piece* p = find(t);
+  if (!p) {
+    p = &pieces_.back();
+    t = p->t1;
+  }
+  const double x = std::max(0.0, t - p->t0);
+  const auto& c = p->c;
+  return c[0] + x * (c[1] + x * (c[2] + x * (c[3] + x * (c[4] + x * c[5]))));
+}
+
+double Curve::slope(double t) const {
+  const Piece* p = find(t);
+  if (!p || t < p->t0) return 0;
+  const double x = t - p->t0;
+  const auto& c = p->c;
+  return c[1] + x * (2 * c[2] + x * (3 * c[3] + x * (4 * c[4] + x * 5 * c[5])));
+}
+
+double Curve::second(double t) const {
+  const Piece* p = find(t);
+  if (!p || t < p->t0) return 0;
+  const double x = t - p->t0;
+  const auto& c = p->c;
+  return 2 * c[2] + x * (6 * c[3] + x * (12 * c[4] + x * 20 * c[5]));
+}
+
+Curve monotone_curve(const std::vector<std::pair<double, double>>& keys) {
+  Curve curve;
+  const std::size_t n = keys.size();
+  if (n == 0) throw std::logic_error("synth curve: no keys");
+  if (n == 1) {
+    curve.add_hold(keys[0].first, keys[0].first + 1, keys[0].second);
+    return curve;
+  }
+  std::vector<double> delta(n - 1), slope(n, 0.0);
+  for (std::size_t i = 0; i + 1 < n; ++i) {
+    const double h = keys[i + 1].first - keys[i].first;
+    if (!(h > 0)) throw std::logic_error("synth curve: key times must increase");
+    delta[i] = (keys[i + 1].second - keys[i].second) / h;
+  }
+  // Fritsch-Butland weighted harmonic mean: monotone between keys, zero at extrema.
+  for (std::size_t i = 1; i + 1 < n; ++i) {
+    if (delta[i - 1] * delta[i] <= 0) continue;
+    const double h0 = keys[i].first - keys[i - 1].first, h1 = keys[i + 1].first - keys[i].first;
+    const double w0 = 2 * h1 + h0, w1 = h1 + 2 * h0;
+    slope[i] = (w0 + w1) / (w0 / delta[i - 1] + w1 / delta[i]);
+  }
+  for (std::size_t i = 0; i + 1 < n; ++i)
+    curve.add_hermite(keys[i].first, keys[i + 1].first, keys[i].second, slope[i], keys[i + 1].second,
+                      slope[i + 1]);
+  return curve;
+}
+
+double hermite(double y0, double m0, double y1, double m1, double h, double s) {
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * m0 + (-2 * s3 + 3 * s2) * y1 +
+         (s3 - s2) * h * m1;
+}
+
+double hermite_slope(double y0, double m0, double y1, double m1, double h, double s) {
+  const double s2 = s * s;
+  return ((6 * s2 - 6 * s) * y0 + (3 * s2 - 4 * s + 1) * h * m0 + (-6 * s2 + 6 * s) * y1 +
+          (3 * s2 - 2 * s) * h * m1) /
+         h;
+}
+
+Eigen::Vector3d hermite(const Eigen::Vector3d& y0, const Eigen::Vector3d& m0, const Eigen::Vector3d& y1,
+                        const Eigen::Vector3d& m1, double h, double s) {
+  const double s2 = s * s, s3 = s2 * s;
+  return (2 * s3 - 3 * s2 + 1) * y0 + (s3 - 2 * s2 + s) * h * m0 + (-2 * s3 + 3 * s2) * y1 +
+         (s3 - s2) * h * m1;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Feet
+
+FootGeometry::FootGeometry(const Figure& figure) {
+  const FigureDimensions& d = figure.dims;
+  heel_offset_ = figure.heel_local;
+  ball_offset_ = Eigen::Vector3d(0, d.ball_height - d.ankle_height, d.ball_forward);
+  toe_tip_offset_ = figure.toe_tip_local;
+  ball_sole_offset_ = Eigen::Vector3d(0, -d.ball_height, 0);
+}
+
+Eigen::Vector3d FootGeometry::ankle_about(const Eigen::Vector3d& pivot, const Eigen::Vector3d& offset,
+                                          double yaw, double pitch) const {
+  return pivot - rot_y(yaw) * (rot_x(pitch) * offset);
+}
+
+Eigen::Vector3d FootGeometry::ankle_about_dpitch(const Eigen::Vector3d& offset, double yaw,
+                                                 double pitch) const {
+  // d/dp of rot_x(p) * v is (0, -vy sin p - vz cos p, vy cos p - vz sin p).
+  const double c = std::cos(pitch), s = std::sin(pitch);
+  const Eigen::Vector3d dv(0, -offset.y() * s - offset.z() * c, offset.y() * c - offset.z() * s);
+  return -(rot_y(yaw) * dv);
+}
+
+FootGeometry::Points FootGeometry::points(const FootState& foot) const {
+  const Eigen::Matrix3d Rf = rot_y(foot.yaw) * rot_x(foot.pitch);
+  const Eigen::Matrix3d Rt = rot_y(foot.yaw) * rot_x(foot.toe_pitch);
+  Points p;
+  p.heel = foot.ankle + Rf * heel_offset_;
+  p.ball = foot.ankle + Rf * ball_offset_;
+  p.ball_sole = p.ball + Rt * ball_sole_offset_;
+  p.toe_tip = p.ball + Rt * toe_tip_offset_;
+  return p;
+}
+
+double FootGeometry::lowest(const FootState& foot) const {
+  const Points p = points(foot);
+  return std::min({p.heel.y(), p.ball_sole.y(), p.toe_tip.y()});
+}
+
+Eigen::Vector3d FootGeometry::heel_when_flat(const Eigen::Vector3d& ankle, double yaw) const {
+  return ankle + rot_y(yaw) * heel_offset_;
+}
+
+Eigen::Vector3d FootGeometry::ball_when_flat(const Eigen::Vector3d& ankle, double yaw) const {
+  return ankle + rot_y(yaw) * ball_offset_;
+}
+
+// ---------------------------------------------------------------------------------------------
+// Pose writer
+
+namespace {
+const motion::RotationOrder kZxy{{2, 0, 1}, 3};
+
+// Half of a rotation (same axis, half the angle); the rotations involved stay well below pi.
+Eigen::Matrix3d half_rotation(const Eigen::Matrix3d& R) {
+  Eigen::AngleAxisd aa(R);
+  return Eigen::AngleAxisd(aa.angle() / 2, aa.axis()).toRotationMatrix();
+}
+}  // namespace
+
+PoseWriter::PoseWriter(const Figure& figure)
+    : figure_(figure),
+      previous_(static_cast<std::size_t>(figure.skeleton->joint_count()), Eigen::Vector3d::Zero()) {}
+
+Eigen::Vector3d PoseWriter::hip_world(const BodyPose& pose, Side side) const {
+  return pose.root + pose.pelvis * figure_.skeleton->joint(figure_.up_leg[side]).offset;
+}
+
+double PoseWriter::leg_extension(const BodyPose& pose, Side side) const {
+  return (pose.feet[side].ankle - hip_world(pose, side)).norm() / figure_.dims.leg_length();
+}
+
+void PoseWriter::set_euler(int joint, const Eigen::Matrix3d& local, double* frame) {
+  Eigen::Vector3d& prev = previous_[static_cast<std::size_t>(joint)];
+  prev = motion::matrix_to_euler(local, kZxy, prev);
+  const int c = figure_.skeleton->joint(joint).first_channel + (joint == figure_.hips ? 3 : 0);
+  frame[c] = prev[0];
+  frame[c + 1] = prev[1];
+  frame[c + 2] = prev[2];
+}
+
+double PoseWriter::write(const BodyPose& pose, double* frame) {
+  const Figure& f = figure_;
+  const motion::Skeleton& sk = *f.skeleton;
+  const int rc = sk.joint(f.hips).first_channel;
+  frame[rc] = pose.root.x();
+  frame[rc + 1] = pose.root.y();
+  frame[rc + 2] = pose.root.z();
+  set_euler(f.hips, pose.pelvis, frame);
+
+  // The trunk's rotation shared equally by Spine and Chest, the head's by Neck and Head.
+  const Eigen::Matrix3d spine_half = half_rotation(pose.pelvis.transpose() * pose.chest);
+  set_euler(f.spine, spine_half, frame);
+  set_euler(f.chest, spine_half.transpose() * pose.pelvis.transpose() * pose.chest, frame);
+  const Eigen::Matrix3d neck_half = half_rotation(pose.chest.transpose() * pose.head);
+  set_euler(f.neck, neck_half, frame);
+  set_euler(f.head, neck_half.transpose() * pose.chest.transpose() * pose.head, frame);
+
+  for (Side side : {kLeft, kRight}) {
+    const ArmPose& a = pose.arms[side];
+    // Written straight as Z (abduction) X (flexion) Y (none): no decomposition, so an arm raised
+    // past 90 degrees meets no Euler singularity.
+    auto put = [&](int joint, double z, double x) {
+      const int c = sk.joint(joint).first_channel;
+      frame[c] = z;
+      frame[c + 1] = x;
+      frame[c + 2] = 0;
+      previous_[static_cast<std::size_t>(joint)] = Eigen::Vector3d(z, x, 0);
+    };
+    put(f.shoulder[side], 0, 0);
+    put(f.arm[side], side_sign(side) * a.abduction, -a.flexion);
+    put(f.forearm[side], 0, -a.elbow);
+    put(f.hand[side], 0, 0);
+  }
+
+  const double L1 = f.dims.thigh, L2 = f.dims.shank, L = L1 + L2;
+  double worst = 0;
+  for (Side side : {kLeft, kRight}) {
+    const FootState& foot = pose.feet[side];
+    const Eigen::Vector3d hip = hip_world(pose, side);
+    const Eigen::Vector3d d = foot.ankle - hip;
+    const double D = d.norm();
+    worst = std::max(worst, D / L);
+    const double Dc = std::clamp(D, std::abs(L1 - L2) + 1e-6 * L, kMaxExtension * L);
+    const Eigen::Vector3d u = d / D;
+    // The knee points where the foot and the pelvis head, in the plane through hip and ankle.
+    Eigen::Vector3d forward = rot_y(foot.yaw) * Eigen::Vector3d::UnitZ();
+    Eigen::Vector3d pelvis_forward = pose.pelvis * Eigen::Vector3d::UnitZ();
+    pelvis_forward.y() = 0;
+    forward += pelvis_forward.normalized();
+    Eigen::Vector3d pole = forward - forward.dot(u) * u;
+    pole.normalize();
+    const double cos_hip = std::clamp((L1 * L1 + Dc * Dc - L2 * L2) / (2 * L1 * Dc), -1.0, 1.0);
+    const double sin_hip = std::sqrt(1 - cos_hip * cos_hip);
+    const Eigen::Vector3d knee = hip + L1 * (cos_hip * u + sin_hip * pole);
+    Eigen::Matrix3d thigh;
+    thigh.col(1) = (hip - knee) / L1;
+    thigh.col(2) = (pole - pole.dot(thigh.col(1)) * thigh.col(1)).normalized();
+    thigh.col(0) = thigh.col(1).cross(thigh.col(2));
+    // Knee flexion from the shank's direction in the thigh's frame: (0, -cos k, -sin k).
+    const Eigen::Vector3d shank_dir = thigh.transpose() * ((hip + Dc * u - knee) / L2);
+    const double knee_angle = std::atan2(-shank_dir.z(), -shank_dir.y());
+
+    set_euler(f.up_leg[side], pose.pelvis.transpose() * thigh, frame);
+    const int kc = sk.joint(f.leg[side]).first_channel;
+    frame[kc] = 0;
+    frame[kc + 1] = knee_angle;
+    frame[kc + 2] = 0;
+    previous_[static_cast<std::size_t>(f.leg[side])] = Eigen::Vector3d(0, knee_angle, 0);
+    const Eigen::Matrix3d shank = thigh * rot_x(knee_angle);
+    const Eigen::Matrix3d foot_world = rot_y(foot.yaw) * rot_x(foot.pitch);
+    set_euler(f.foot[side], shank.transpose() * foot_world, frame);
+    const int tc = sk.joint(f.toe[side]).first_channel;
+    frame[tc] = 0;
+    frame[tc + 1] = foot.toe_pitch - foot.pitch;
+    frame[tc + 2] = 0;
+  }
+  return worst;
+}
+
+double root_height_for(const PoseWriter& writer, BodyPose pose, double extension, double lo, double hi) {
+  for (int i = 0; i < 60; ++i) {
+    pose.root.y() = (lo + hi) / 2;
+    const double e = std::max(writer.leg_extension(pose, kLeft), writer.leg_extension(pose, kRight));
+    (e <= extension ? lo : hi) = pose.root.y();
+  }
+  return lo;
+}
+
+std::pair<int, int> frame_span(double t0, double t1, double fps) {
+  const double slack = 1e-7;  // frames
+  return {static_cast<int>(std::ceil(t0 * fps - slack)), static_cast<int>(std::floor(t1 * fps + slack))};
+}
+
+void check_range(const char* what, const char* name, double value, double min, double max, const char* unit) {
+  if (std::isfinite(value) && value >= min && value <= max) return;
+  std::ostringstream s;
+  s << "synthesize_" << what << ": " << name << " " << value << (*unit ? " " : "") << unit << ": expected "
+    << min << " to " << max;
+  throw std::invalid_argument(s.str());
+}
+
+}  // namespace kg::synth::detail

@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# One entry point for set-up on a fresh Debian 12 machine (run as root, or with sudo available):
+#   bash scripts/dev.sh demo    install what is missing, build, run graphs/demo.yaml (writes out/)
+#   bash scripts/dev.sh test    install what is missing, build, run every test with CTest
+#   bash scripts/dev.sh build   install what is missing and build only
+# Environment: BUILD_DIR (default build), JOBS (default nproc), KG_SKIP_BLENDER=1 skips installing
+# Blender (its tests then skip with a message).
+set -euo pipefail
+
+here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$here"
+build_dir=${BUILD_DIR:-build}
+jobs=${JOBS:-$(nproc)}
+
+build_packages=(g++ cmake ninja-build pkg-config libeigen3-dev libceres-dev libglpk-dev libyaml-cpp-dev
+                libboost-dev libboost-filesystem-dev catch2)
+test_packages=()
+[[ ${KG_SKIP_BLENDER:-0} == 1 ]] || test_packages+=(blender)
+
+install_missing() {
+  local missing=()
+  for p in "$@"; do
+    dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+  done
+  ((${#missing[@]})) || return 0
+  echo "Installing missing Debian packages: ${missing[*]}"
+  local sudo=()
+  [[ $(id -u) == 0 ]] || sudo=(sudo)
+  "${sudo[@]}" apt-get update -qq
+  DEBIAN_FRONTEND=noninteractive "${sudo[@]}" apt-get install -y -qq --no-install-recommends "${missing[@]}"
+}
+
+build() {
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release
+  cmake --build "$build_dir" -j "$jobs"
+}
+
+case "${1:-}" in
+  demo)
+    install_missing "${build_packages[@]}"
+    build
+    "$build_dir/bin/kinegraph" run graphs/demo.yaml --report out/demo_report.json "${@:2}"
+    echo "Demo outputs are in out/ (per-node timings and figures: out/demo_report.json)."
+    ;;
+  test)
+    install_missing "${build_packages[@]}" "${test_packages[@]}"
+    build
+    cd "$build_dir"
+    ctest --output-on-failure -j "$jobs" --timeout 600
+    ;;
+  build)
+    install_missing "${build_packages[@]}"
+    build
+    ;;
+  *)
+    echo "usage: bash scripts/dev.sh demo|test|build" >&2
+    exit 2
+    ;;
+esac

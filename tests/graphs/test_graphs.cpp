@@ -1,0 +1,156 @@
+// Every pipeline in graphs/ run end to end through the kinegraph CLI, as a user runs it:
+// the demo on synthesized motion, and convert.yaml on every clip of ../shared/data, whose
+// output must read back to the same frames and joint world positions as its source.
+#include <algorithm>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <catch2/catch.hpp>
+
+#include "../support/process.hpp"
+#include "kg/io/asf_amc.hpp"
+#include "kg/io/bvh.hpp"
+#include "kg/motion/kinematics.hpp"
+#include "kg/motion/resample.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+using kg::test::Result;
+using kg::test::show;
+using kg::test::TempDir;
+
+const fs::path kSource = KG_SOURCE_DIR;
+const fs::path kData = KG_DATA_DIR;
+
+Result kinegraph(const std::vector<std::string>& args) {
+  return kg::test::run_program(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph", args);
+}
+
+// Every motion clip in the data folder: .bvh files, and .amc files (their .asf is guessed).
+std::vector<fs::path> data_clips() {
+  std::vector<fs::path> clips;
+  if (!fs::exists(kData)) return clips;
+  for (const auto& entry : fs::recursive_directory_iterator(kData)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext == ".bvh" || ext == ".amc") clips.push_back(entry.path());
+  }
+  std::sort(clips.begin(), clips.end());
+  return clips;
+}
+
+// Joint origins (metres, world) of every frame of `b`, compared with the same-named joints of
+// `a`; returns the worst distance.
+double worst_joint_distance(const kg::motion::Motion& a, const kg::motion::Motion& b) {
+  const Eigen::MatrixXd pa = kg::motion::joint_world_positions(a);
+  const Eigen::MatrixXd pb = kg::motion::joint_world_positions(b);
+  double worst = 0;
+  for (int jb = 0; jb < b.skeleton->joint_count(); ++jb) {
+    const int ja = a.skeleton->find_joint(b.skeleton->joint(jb).name);
+    REQUIRE(ja >= 0);
+    worst = std::max(worst, (pa.middleCols(3 * ja, 3) - pb.middleCols(3 * jb, 3)).rowwise().norm().maxCoeff());
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("every graph in graphs/ validates", "[graphs]") {
+  for (const auto& entry : fs::directory_iterator(kSource / "graphs")) {
+    if (entry.path().extension() != ".yaml") continue;
+    std::vector<std::string> args{"validate", entry.path().string()};
+    if (entry.path().filename() == "convert.yaml")
+      args.insert(args.end(), {"--set", "input=" + (kSource / "tests/graphs/data/two_joints.bvh").string()});
+    const Result r = kinegraph(args);
+    INFO(entry.path() << "\n" << show(r));
+    CHECK(r.code == 0);
+  }
+}
+
+TEST_CASE("graphs/demo.yaml runs on synthesized motion and writes readable clips", "[graphs]") {
+  TempDir out;
+  const Result r = kinegraph({"run", (kSource / "graphs/demo.yaml").string(), "--set", "out=" + out.path().string(),
+                              "--jobs", "2", "--report", (out / "report.json").string()});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  CHECK(fs::exists(out / "report.json"));
+
+  const auto walk = kg::io::read_bvh(out / "walk_120hz.bvh").motion;
+  const auto walk_30 = kg::io::read_bvh(out / "walk_30hz.bvh").motion;
+  const auto walk_smooth = kg::io::read_bvh(out / "walk_smooth.bvh").motion;
+  const auto jump = kg::io::read_bvh(out / "jump_120hz.bvh").motion;
+  const auto jump_30 = kg::io::read_bvh(out / "jump_30hz.bvh").motion;
+  CHECK(walk.fps == Approx(120));
+  CHECK(walk_30.fps == Approx(30));
+  CHECK(walk_30.frame_count() == kg::motion::resampled_frame_count(walk.frame_count(), 120, 30));
+  CHECK(jump_30.frame_count() == kg::motion::resampled_frame_count(jump.frame_count(), 120, 30));
+  CHECK(walk_smooth.frame_count() == walk.frame_count());
+  CHECK(walk.skeleton->joint_count() == jump.skeleton->joint_count());
+}
+
+TEST_CASE("graphs/convert.yaml converts every clip in ../shared/data", "[graphs][data]") {
+  const std::vector<fs::path> clips = data_clips();
+  if (clips.empty()) {
+    WARN("skipped: no motion clips found in " << kData);
+    return;
+  }
+  TempDir out;
+  for (const fs::path& clip : clips) {
+    const fs::path output = out / (clip.stem().string() + "_" + clip.parent_path().filename().string() + ".bvh");
+    const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                                "input=" + clip.string(), "--set", "output=" + output.string()});
+    INFO(clip << "\n" << show(r));
+    REQUIRE(r.code == 0);
+
+    // The source as the graph read it (auto units and up), and the output read back in the
+    // same unit and up axis: the same clip, to the printed precision of the export.
+    const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
+    const auto& skeleton = *source.motion.skeleton;
+    kg::io::ImportOptions same{.units = kg::io::unit_name(skeleton.source_unit_metres),
+                               .up = kg::io::up_axis_name(skeleton.file_to_world)};
+    const kg::motion::Motion back = kg::io::import_bvh(output, same).motion;
+    CHECK(back.frame_count() == source.motion.frame_count());
+    CHECK(back.fps == Approx(source.motion.fps).epsilon(1e-8));
+    CHECK(worst_joint_distance(source.motion, back) < 1e-4);
+  }
+}
+
+TEST_CASE("graphs/convert.yaml resamples, overrides fps and units, and refuses bad input", "[graphs][data]") {
+  const fs::path jump = kData / "cmu/bvh_cmu_names/16_01.bvh";
+  if (!fs::exists(jump)) {
+    WARN("skipped: " << jump << " not found");
+    return;
+  }
+  TempDir out;
+  // 16_01.bvh says 30 fps but is 120 fps; ASF units (inches / 0.45).
+  const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + jump.string(),
+                              "--set", "output=" + (out / "jump.bvh").string(), "--set", "fps=120", "--set",
+                              "units=asf", "--set", "resample=30"});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  const auto source = kg::io::read_bvh(jump).motion;
+  const auto converted = kg::io::read_bvh(out / "jump.bvh").motion;
+  CHECK(converted.fps == Approx(30));
+  CHECK(converted.frame_count() == kg::motion::resampled_frame_count(source.frame_count(), 120, 30));
+
+  // The input is never overwritten: an output path equal to the input is refused before running.
+  TempDir work;
+  fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
+  const std::string before = kg::test::read_file(work / "clip.bvh");
+  const Result same = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                                 "input=" + (work / "clip.bvh").string(), "--set",
+                                 "output=" + (work / "clip.bvh").string()});
+  CHECK(same.code == 3);
+  CHECK(kg::test::read_file(work / "clip.bvh") == before);
+
+  // A malformed clip fails its node with file:line, exit 1, and writes nothing.
+  work.write("broken.bvh", "HIERARCHY\nROOT hip\n{\n  OFFSET 0 0\n");
+  const Result broken = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                                   "input=" + (work / "broken.bvh").string(), "--set",
+                                   "output=" + (work / "never.bvh").string()});
+  INFO(show(broken));
+  CHECK(broken.code == 1);
+  CHECK_THAT(broken.err, Catch::Contains("broken.bvh:4"));
+  CHECK_FALSE(fs::exists(work / "never.bvh"));
+}

@@ -1,0 +1,154 @@
+// Our exported BVH opens in Blender and poses the same: Debian's `blender -b` imports our files
+// (tests/io/blender_import_bvh.py) and its pose-bone heads match our forward kinematics.
+// Skips with a visible message when blender is not installed.
+#include <catch2/catch.hpp>
+
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "kg/graph/atomic_file.hpp"
+#include "kg/io/bvh.hpp"
+#include "kg/motion/kinematics.hpp"
+#include "test_bvh_data.hpp"
+
+namespace {
+
+namespace fs = std::filesystem;
+
+bool have_blender() {
+  return std::system("command -v blender >/dev/null 2>&1") == 0;
+}
+
+// A clip with every Euler order, position channels on a child listed after its rotations, a
+// joint without channels, End Sites; random poses. Metres.
+kg::motion::Motion mixed_orders_clip() {
+  std::string text =
+      "HIERARCHY\nROOT base\n{\n OFFSET 0.1 0.9 -0.2\n CHANNELS 6 Xposition Yposition Zposition Yrotation "
+      "Xrotation Zrotation\n"
+      " JOINT a\n {\n  OFFSET 0 0.2 0.05\n  CHANNELS 3 Xrotation Yrotation Zrotation\n"
+      "  JOINT b\n  {\n   OFFSET 0.1 0.25 0\n   CHANNELS 3 Xrotation Zrotation Yrotation\n"
+      "   JOINT c\n   {\n    OFFSET 0 0.3 0.02\n    CHANNELS 6 Zrotation Xrotation Yrotation Xposition "
+      "Yposition Zposition\n"
+      "    End Site\n    {\n     OFFSET 0 0.1 0\n    }\n   }\n  }\n"
+      "  JOINT fixed\n  {\n   OFFSET -0.15 0.1 0\n   CHANNELS 0\n"
+      "   JOINT d\n   {\n    OFFSET -0.2 0 0\n    CHANNELS 3 Yrotation Zrotation Xrotation\n"
+      "    End Site\n    {\n     OFFSET -0.2 0 0.01\n    }\n   }\n  }\n }\n"
+      " JOINT e\n {\n  OFFSET 0.1 -0.05 0\n  CHANNELS 3 Zrotation Yrotation Xrotation\n"
+      "  JOINT f\n  {\n   OFFSET 0 -0.45 0\n   CHANNELS 3 Zrotation Xrotation Yrotation\n"
+      "   End Site\n   {\n    OFFSET 0 -0.4 0.05\n   }\n  }\n }\n}\n"
+      "MOTION\nFrames: 9\nFrame Time: 0.04\n";
+  std::mt19937 rng(2024);
+  std::uniform_real_distribution<double> angle(-120, 120), pos(-0.3, 0.3);
+  for (int f = 0; f < 9; ++f) {
+    std::ostringstream line;
+    line.precision(10);
+    for (int c = 0; c < 27; ++c) {
+      const bool position = c < 3 || (c >= 15 && c < 18);  // base's 0..2, c's 15..17
+      line << (c ? " " : "") << (position ? pos(rng) + (c == 1 ? 0.9 : 0.0) : angle(rng));
+    }
+    text += line.str() + "\n";
+  }
+  auto clip = kg::io::parse_bvh(text, "mixed.bvh");
+  kg::io::apply_import_options(clip.motion, {.units = "m", .up = "y"}, 25, "mixed.bvh");
+  return clip.motion;
+}
+
+struct BlenderPose {
+  std::map<int, std::map<std::string, Eigen::Vector3d>> heads;  // frame -> bone -> Blender world
+};
+
+BlenderPose read_tsv(const fs::path& p) {
+  BlenderPose pose;
+  std::ifstream in(p);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    int frame;
+    std::string bone;
+    Eigen::Vector3d x;
+    std::getline(s >> frame >> std::ws, bone, '\t');
+    s >> x.x() >> x.y() >> x.z();
+    if (s) pose.heads[frame][bone] = x;
+  }
+  return pose;
+}
+
+// Worst distance (metres) between Blender's heads and ours, converted to Blender's axes.
+double compare(const kg::motion::Motion& m, const BlenderPose& pose, int& compared) {
+  const auto& s = *m.skeleton;
+  // Blender's importer maps BVH Y-up to its Z-up: (x, y, z) -> (x, -z, y).
+  Eigen::Matrix3d to_blender;
+  to_blender << 1, 0, 0, 0, 0, -1, 0, 1, 0;
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
+  double worst = 0;
+  compared = 0;
+  for (const auto& [frame, bones] : pose.heads) {
+    kg::motion::forward_kinematics(s, m.values.row(frame), world);
+    for (int j = 0; j < s.joint_count(); ++j) {
+      auto it = bones.find(s.joint(j).name);
+      if (it == bones.end()) {
+        FAIL_CHECK("Blender has no bone " << s.joint(j).name);
+        continue;
+      }
+      const Eigen::Vector3d ours = to_blender * (s.file_to_world.transpose() * world[j].translation());
+      worst = std::max(worst, (ours - it->second).norm());
+      ++compared;
+    }
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE("blender: our BVH export imports in Blender with the same joint positions") {
+  if (!have_blender()) {
+    WARN("skipped: blender is not installed (apt-get install blender to run this test)");
+    return;
+  }
+  const fs::path dir = fs::temp_directory_path() / ("kg_test_blender_" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  const fs::path script = fs::path(KG_SOURCE_DIR) / "tests/io/blender_import_bvh.py";
+
+  std::vector<std::pair<std::string, kg::motion::Motion>> clips;
+  clips.emplace_back("mixed", mixed_orders_clip());
+  if (auto p = kg::test::data_file("cmu/bvh_motionbuilder/16_15.bvh")) {
+    // ZXY, root OFFSET equal to frame 0: Blender must also replace, not add.
+    clips.emplace_back("16_15", kg::io::import_bvh(*p, {}).motion);
+  } else {
+    WARN("cmu/bvh_motionbuilder/16_15.bvh not found: only the synthetic clip goes through Blender");
+  }
+
+  std::string command =
+      "blender -b --factory-startup --python-exit-code 1 --python '" + script.string() + "' --";
+  for (const auto& [name, m] : clips) {
+    const fs::path bvh = dir / (name + ".bvh");
+    kg::graph::write_file_atomically(bvh,
+                                     [&](std::ostream& os) { kg::io::write_bvh(os, m, {.units = "m"}); });
+    command += " '" + bvh.string() + "' '" + (dir / (name + ".tsv")).string() + "'";
+  }
+  command += " > '" + (dir / "blender.log").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  INFO("command: " << command << "\nBlender's output:\n" << kg::test::slurp(dir / "blender.log"));
+  REQUIRE(status == 0);
+
+  for (const auto& [name, m] : clips) {
+    INFO("clip " << name);
+    const BlenderPose pose = read_tsv(dir / (name + ".tsv"));
+    REQUIRE(pose.heads.size() == std::min<std::size_t>(5, static_cast<std::size_t>(m.frame_count())));
+    int compared = 0;
+    const double worst = compare(m, pose, compared);
+    CHECK(compared == static_cast<int>(pose.heads.size()) * m.skeleton->joint_count());
+    CHECK(worst < 1e-4);
+    WARN("Blender vs Kinegraph, " << name << ": worst joint distance " << worst * 1e3 << " mm over "
+                                  << compared << " joint-frames");
+  }
+  fs::remove_all(dir);
+}

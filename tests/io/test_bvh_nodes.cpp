@@ -1,0 +1,158 @@
+// io.import_bvh and io.export_bvh through their specs and a minimal RunContext: ports, params,
+// reports, logged notes, atomic writing.
+#include <catch2/catch.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <unistd.h>
+
+#include "kg/builtin_nodes.hpp"
+#include "kg/io/bvh.hpp"
+#include "test_bvh_data.hpp"
+
+namespace {
+
+using kg::graph::Figure;
+using kg::graph::Params;
+using kg::graph::Value;
+
+class TestContext final : public kg::graph::RunContext {
+ public:
+  explicit TestContext(Params params) : params_(std::move(params)) {}
+  const std::string& node_id() const override { return id_; }
+  const Params& params() const override { return params_; }
+  const Value& input_value(const std::string& port) const override {
+    auto it = inputs.find(port);
+    return it == inputs.end() ? empty_ : it->second;
+  }
+  void set_output(const std::string& port, Value value) override { outputs[port] = std::move(value); }
+  void report(const std::string& key, Figure value) override { reports[key] = std::move(value); }
+  void log(const std::string& message) override { logs.push_back(message); }
+
+  std::map<std::string, Value> inputs, outputs;
+  std::map<std::string, Figure> reports;
+  std::vector<std::string> logs;
+
+ private:
+  std::string id_ = "test";
+  Params params_;
+  Value empty_;
+};
+
+const kg::graph::NodeType& node_type(const std::string& name) {
+  static const std::vector<kg::graph::NodeType> types = kg::bvh_node_types();
+  for (const auto& t : types)
+    if (t.spec.type == name) return t;
+  FAIL("no node type " << name);
+  throw;
+}
+
+// The params as validation would hand them over: given ones plus the spec's defaults.
+Params with_defaults(const kg::graph::NodeSpec& spec, std::map<std::string, kg::graph::ParamValue> given) {
+  for (const auto& p : spec.params)
+    if (!p.required && !given.count(p.name)) given[p.name] = p.default_value;
+  return Params(std::move(given));
+}
+
+std::filesystem::path temp_dir() {
+  auto d = std::filesystem::temp_directory_path() / ("kg_test_bvh_nodes_" + std::to_string(::getpid()));
+  std::filesystem::create_directories(d);
+  return d;
+}
+
+}  // namespace
+
+TEST_CASE("bvh nodes: specs declare ports and params") {
+  const auto& imp = node_type("io.import_bvh").spec;
+  CHECK(imp.inputs.empty());
+  REQUIRE(imp.find_output("motion"));
+  CHECK(imp.find_output("motion")->type == "kg.Motion");
+  CHECK(imp.find_output("skeleton")->type == "kg.Skeleton");
+  REQUIRE(imp.find_param("path"));
+  CHECK(imp.find_param("path")->type == kg::graph::ParamType::InputPath);
+  CHECK(imp.find_param("path")->required);
+  CHECK(imp.find_param("units")->choices.size() == 6);
+  CHECK(imp.find_param("up"));
+  CHECK(imp.find_param("fps")->min == 0.0);
+
+  const auto& exp = node_type("io.export_bvh").spec;
+  REQUIRE(exp.find_input("motion"));
+  CHECK(exp.find_input("motion")->type == "kg.Motion");
+  CHECK(exp.find_input("motion")->required);
+  CHECK(exp.outputs.empty());
+  CHECK(exp.find_param("path")->type == kg::graph::ParamType::OutputPath);
+  CHECK(exp.find_param("path")->required);
+  CHECK(exp.find_param("units")->choices == std::vector<std::string>{"source", "m", "cm", "mm", "inch"});
+  CHECK(exp.find_param("precision")->min == 1.0);
+  CHECK(exp.find_param("precision")->max == 12.0);
+  CHECK(std::get<std::int64_t>(exp.find_param("precision")->default_value) == 6);
+}
+
+TEST_CASE("bvh nodes: import, report, export atomically, import again") {
+  const auto dir = temp_dir();
+  const auto in_path = dir / "small.bvh";
+  {
+    std::ofstream f(in_path);
+    f << "HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation "
+         "Xrotation "
+         "Yrotation\n JOINT knee\n {\n  OFFSET 0 -45 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End "
+         "Site\n"
+         "  {\n   OFFSET 0 -45 0\n  }\n }\n End Site\n {\n  OFFSET 0 80 0\n }\n}\nMOTION\nFrames: 3\n"
+         "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n";
+  }
+  const auto& imp = node_type("io.import_bvh");
+  auto node = imp.create(with_defaults(imp.spec, {{"path", in_path.string()}, {"fps", 60.0}}));
+  TestContext ctx(Params{});
+  node->run(ctx);
+  const auto& m = ctx.outputs.at("motion").get<kg::motion::Motion>();
+  const auto& s = ctx.outputs.at("skeleton").get<kg::motion::Skeleton>();
+  CHECK(&s == m.skeleton.get());
+  CHECK(m.fps == 60.0);
+  CHECK(std::get<std::int64_t>(ctx.reports.at("frames")) == 3);
+  CHECK(std::get<std::int64_t>(ctx.reports.at("joints")) == 2);
+  CHECK(std::get<std::int64_t>(ctx.reports.at("channels")) == 9);
+  CHECK(std::get<double>(ctx.reports.at("fps")) == 60.0);
+  CHECK(std::get<double>(ctx.reports.at("seconds")) == Approx(2.0 / 60));
+  CHECK(std::get<std::string>(ctx.reports.at("units")) == "cm");
+  CHECK(std::get<std::string>(ctx.reports.at("up")) == "y");
+  REQUIRE(ctx.logs.size() == 3);  // up, units, fps
+  CHECK(ctx.logs[1].find("units auto: standing height 170 file units, taken as cm (1.70 m)") !=
+        std::string::npos);
+  CHECK(std::get<std::string>(ctx.reports.at("notes")).find("taken as cm") != std::string::npos);
+
+  const auto& exp = node_type("io.export_bvh");
+  const auto out_path = dir / "sub" / "out.bvh";
+  auto writer =
+      exp.create(with_defaults(exp.spec, {{"path", out_path.string()}, {"units", std::string("m")}}));
+  TestContext wctx(Params{});
+  wctx.inputs["motion"] = ctx.outputs.at("motion");
+  writer->run(wctx);
+  CHECK(std::get<std::string>(wctx.reports.at("path")) == out_path.string());
+  CHECK(std::get<std::int64_t>(wctx.reports.at("frames")) == 3);
+  const std::string text = kg::test::slurp(out_path);
+  CHECK(text.find("\t\tOFFSET 0 -0.45 0\n") != std::string::npos);
+  CHECK(text.find("Frame Time: 0.0166666667\n") != std::string::npos);
+  CHECK(text.find("\n0.02 0.9 0 0 0 0 30 0 0\n") != std::string::npos);
+  // Only the target is left behind: the temporary file was renamed over it.
+  int files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(out_path.parent_path())) ++files;
+  CHECK(files == 1);
+
+  // A malformed file fails the node with file:line.
+  {
+    std::ofstream f(in_path);
+    f << "HIERARCHY\nROOT hip\n{\n OFFSET 0 0\n";
+  }
+  try {
+    node->run(ctx);
+    FAIL("no error");
+  } catch (const std::exception& e) {
+    INFO(e.what());
+    CHECK(std::string(e.what()).find("small.bvh:4:12: expected OFFSET z of joint hip") != std::string::npos);
+  }
+  std::filesystem::remove_all(dir);
+}
