@@ -4,7 +4,6 @@
 #include <cmath>
 #include <sstream>
 #include <string>
-#include <variant>
 
 #include "kg/graph/json.hpp"
 #include "kg/graph/plugin_abi.hpp"
@@ -56,36 +55,15 @@ void print_ports(std::ostream& os, const char* title, const std::vector<PortSpec
   }
 }
 
-void json_param_value(JsonWriter& w, const graph::ParamValue& value) {
-  std::visit(
-      [&](const auto& v) {
-        using T = std::decay_t<decltype(v)>;
-        if constexpr (std::is_same_v<T, std::vector<double>>) {
-          w.begin_array();
-          for (double x : v) w.value(x);
-          w.end_array();
-        } else {
-          w.value(v);
-        }
-      },
-      value);
-}
-
 void json_ports(JsonWriter& w, const char* key, const std::vector<PortSpec>& ports, bool inputs) {
   w.key(key);
   w.begin_array();
   for (const PortSpec& port : ports) {
     w.begin_object();
-    w.key("name");
-    w.value(port.name);
-    w.key("type");
-    w.value(port.type);
-    if (inputs) {
-      w.key("required");
-      w.value(port.required);
-    }
-    w.key("doc");
-    w.value(port.doc);
+    w.field("name", port.name);
+    w.field("type", port.type);
+    if (inputs) w.field("required", port.required);
+    w.field("doc", port.doc);
     w.end_object();
   }
   w.end_array();
@@ -158,24 +136,17 @@ void print_nodes_json(std::ostream& os, const graph::Registry& registry,
                       const std::vector<graph::LoadedPlugin>& plugins) {
   JsonWriter w(os);
   w.begin_object();
-  w.key("kinegraph");
-  w.value(KG_VERSION);
-  w.key("plugin_abi");
-  w.value(static_cast<std::int64_t>(graph::kPluginAbiVersion));
+  w.field("kinegraph", KG_VERSION);
+  w.field("plugin_abi", static_cast<std::int64_t>(graph::kPluginAbiVersion));
   w.key("plugins");
   w.begin_array();
   for (const graph::LoadedPlugin& plugin : plugins) {
     w.begin_object();
-    w.key("id");
-    w.value(plugin.id);
-    w.key("version");
-    w.value(plugin.version);
-    w.key("path");
-    w.value(plugin.path.string());
-    w.key("nodes");
-    w.value(plugin.node_count);
-    w.key("extensions");
-    w.value(plugin.extension_count);
+    w.field("id", plugin.id);
+    w.field("version", plugin.version);
+    w.field("path", plugin.path.string());
+    w.field("nodes", plugin.node_count);
+    w.field("extensions", plugin.extension_count);
     w.end_object();
   }
   w.end_array();
@@ -186,50 +157,32 @@ void print_nodes_json(std::ostream& os, const graph::Registry& registry,
     if (type == nullptr) continue;
     const graph::NodeSpec& spec = type->spec;
     w.begin_object();
-    w.key("type");
-    w.value(spec.type);
-    w.key("version");
-    w.value(spec.version);
-    w.key("doc");
-    w.value(spec.doc);
-    w.key("origin");
-    w.value(registry.node_origin(name));
+    w.field("type", spec.type);
+    w.field("version", spec.version);
+    w.field("doc", spec.doc);
+    w.field("origin", registry.node_origin(name));
     json_ports(w, "inputs", spec.inputs, true);
     json_ports(w, "outputs", spec.outputs, false);
     w.key("params");
     w.begin_array();
     for (const ParamSpec& p : spec.params) {
       w.begin_object();
-      w.key("name");
-      w.value(p.name);
-      w.key("type");
-      w.value(graph::to_string(p.type));
-      w.key("required");
-      w.value(p.required);
+      w.field("name", p.name);
+      w.field("type", graph::to_string(p.type));
+      w.field("required", p.required);
       w.key("default");
       if (p.required) {
         w.null();
       } else {
-        json_param_value(w, p.default_value);
+        w.value(p.default_value);
       }
-      w.key("min");
-      if (p.min) {
-        w.value(*p.min);
-      } else {
-        w.null();
-      }
-      w.key("max");
-      if (p.max) {
-        w.value(*p.max);
-      } else {
-        w.null();
-      }
+      w.field("min", p.min);
+      w.field("max", p.max);
       w.key("choices");
       w.begin_array();
       for (const std::string& c : p.choices) w.value(c);
       w.end_array();
-      w.key("doc");
-      w.value(p.doc);
+      w.field("doc", p.doc);
       w.end_object();
     }
     w.end_array();

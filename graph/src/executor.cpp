@@ -108,20 +108,16 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
   const auto t0 = Clock::now();
   const std::size_t n = graph.nodes.size();
 
-  std::map<std::string, std::size_t> index;
-  for (std::size_t i = 0; i < n; ++i) index[graph.nodes[i].id] = i;
   std::vector<std::vector<std::size_t>> downstream(n);
   std::vector<std::vector<Input>> inputs(n);
   std::vector<std::size_t> pending(n, 0);
-  for (const Connection& c : graph.connections) {
-    auto from = index.find(c.from.node), to = index.find(c.to.node);
-    if (from == index.end() || to == index.end())
-      throw Error(
-          "connection " + c.from.to_string() + " -> " + c.to.to_string() + " names a node not in the graph",
-          c.where);
-    downstream[from->second].push_back(to->second);
-    inputs[to->second].push_back({c.to.port, from->second, c.from.port});
-    ++pending[to->second];
+  const std::vector<std::pair<std::size_t, std::size_t>> ends = graph.connection_ends();
+  for (std::size_t k = 0; k < ends.size(); ++k) {
+    const auto [from, to] = ends[k];
+    const Connection& c = graph.connections[k];
+    downstream[from].push_back(to);
+    inputs[to].push_back({c.to.port, from, c.from.port});
+    ++pending[to];
   }
   graph.topological_order();  // throws for a cycle, which would otherwise never finish
 
@@ -266,39 +262,25 @@ void write_report_json(const std::filesystem::path& file, const Graph& graph, co
   write_file_atomically(file, [&](std::ostream& os) {
     JsonWriter w(os);
     w.begin_object();
-    w.key("graph");
-    w.value(graph.file.string());
-    w.key("ok");
-    w.value(result.ok);
-    w.key("wall_seconds");
-    w.value(result.wall_seconds);
+    w.field("graph", graph.file.string());
+    w.field("ok", result.ok);
+    w.field("wall_seconds", result.wall_seconds);
     w.key("variables");
     w.begin_object();
-    for (const auto& [name, value] : graph.values) {
-      w.key(name);
-      w.value(value);
-    }
+    for (const auto& [name, value] : graph.values) w.field(name, value);
     w.end_object();
     w.key("nodes");
     w.begin_array();
     for (const NodeRun& run : result.nodes) {
       w.begin_object();
-      w.key("id");
-      w.value(run.id);
-      w.key("type");
-      w.value(run.type);
-      w.key("status");
-      w.value(to_string(run.status));
-      w.key("message");
-      w.value(run.message);
-      w.key("wall_seconds");
-      w.value(run.wall_seconds);
+      w.field("id", run.id);
+      w.field("type", run.type);
+      w.field("status", to_string(run.status));
+      w.field("message", run.message);
+      w.field("wall_seconds", run.wall_seconds);
       w.key("figures");
       w.begin_object();
-      for (const auto& [key, figure] : run.figures) {
-        w.key(key);
-        std::visit([&](const auto& v) { w.value(v); }, figure);
-      }
+      for (const auto& [key, figure] : run.figures) w.field(key, figure);
       w.end_object();
       w.end_object();
     }

@@ -127,6 +127,12 @@ void JsonWriter::value(bool flag) {
   os_ << (flag ? "true" : "false");
 }
 
+void JsonWriter::value(const std::vector<double>& numbers) {
+  begin_array();
+  for (double x : numbers) value(x);
+  end_array();
+}
+
 void JsonWriter::null() {
   before_value();
   os_ << "null";

@@ -65,8 +65,7 @@ ImportedMotion import_motion(const std::string& path, const std::string& skeleto
                                   ": a BVH file holds its own skeleton; expected skeleton \"\", got \"" +
                                   skeleton_path + "\"");
     }
-    BvhImport in = import_bvh(path, options);
-    return {std::move(in.motion), std::move(in.notes)};
+    return import_bvh(path, options);
   }
   if (ext == ".amc") {
     std::string asf = skeleton_path;

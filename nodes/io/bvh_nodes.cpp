@@ -10,19 +10,13 @@
 namespace kg {
 namespace {
 
-using graph::NodeSpec;
-using graph::Params;
-using graph::ParamSpec;
-using graph::ParamType;
-using graph::RunContext;
-
 class ImportBvhNode final : public graph::Node {
  public:
-  explicit ImportBvhNode(const Params& p)
+  explicit ImportBvhNode(const graph::Params& p)
       : path_(p.get<std::string>("path")), options_(io::import_options_from(p)) {}
 
-  void run(RunContext& ctx) const override {
-    io::BvhImport in = io::import_bvh(path_, options_);
+  void run(graph::RunContext& ctx) const override {
+    io::ImportedMotion in = io::import_bvh(path_, options_);
     for (const std::string& note : in.notes) ctx.log(note);
     const motion::Motion& m = in.motion;
     const motion::Skeleton& s = *m.skeleton;
@@ -50,12 +44,12 @@ class ImportBvhNode final : public graph::Node {
 
 class ExportBvhNode final : public graph::Node {
  public:
-  explicit ExportBvhNode(const Params& p) : path_(p.get<std::string>("path")) {
+  explicit ExportBvhNode(const graph::Params& p) : path_(p.get<std::string>("path")) {
     options_.units = p.get<std::string>("units");
     options_.precision = static_cast<int>(p.get<std::int64_t>("precision"));
   }
 
-  void run(RunContext& ctx) const override {
+  void run(graph::RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
     graph::write_file_atomically(path_, [&](std::ostream& os) { io::write_bvh(os, m, options_); });
     ctx.report("path", path_);
@@ -69,50 +63,60 @@ class ExportBvhNode final : public graph::Node {
   io::BvhWriteOptions options_;
 };
 
-NodeSpec import_spec() {
-  NodeSpec spec{"io.import_bvh",
-                1,
-                "Reads a BVH file (strictly: a malformed file fails with file:line) and brings it to "
-                "metres, radians and +Y up. Position channels replace the OFFSET components they name. "
-                "units/up auto guess from the figure and log what they chose.",
-                {},
-                {{"motion", "kg.Motion", true, "the clip: metres, radians, file channel orders"},
-                 {"skeleton", "kg.Skeleton", true, "its skeleton (the same one the motion holds)"}},
-                {}};
-  ParamSpec path{"path", ParamType::InputPath, std::string{}, "the .bvh file to read", true};
-  spec.params.push_back(path);
-  for (ParamSpec& p : io::import_option_params()) spec.params.push_back(std::move(p));
+graph::NodeSpec import_spec() {
+  graph::NodeSpec spec{
+      .type = "io.import_bvh",
+      .version = 1,
+      .doc =
+          "Reads a BVH file (strictly: a malformed file fails with file:line) and brings it to metres, "
+          "radians and +Y up. Position channels replace the OFFSET components they name. units/up auto "
+          "guess from the figure and log what they chose.",
+      .outputs = {{"motion", "kg.Motion", true, "the clip: metres, radians, file channel orders"},
+                  {"skeleton", "kg.Skeleton", true, "its skeleton (the same one the motion holds)"}},
+      .params = {{.name = "path",
+                  .type = graph::ParamType::InputPath,
+                  .default_value = std::string{},
+                  .doc = "the .bvh file to read",
+                  .required = true}},
+  };
+  for (graph::ParamSpec& p : io::import_option_params()) spec.params.push_back(std::move(p));
   return spec;
 }
 
-NodeSpec export_spec() {
-  NodeSpec spec{"io.export_bvh",
-                1,
-                "Writes a clip as BVH (file axes, degrees, the skeleton's channel orders), atomically. "
-                "Reading it back gives the same values to the printed precision.",
-                {{"motion", "kg.Motion", true, "the clip to write"}},
-                {},
-                {}};
-  spec.params.push_back(
-      ParamSpec{"path", ParamType::OutputPath, std::string{}, "the .bvh file to write", true});
-  ParamSpec units{"units", ParamType::Enum, std::string("source"),
-                  "length unit written: source (the unit the clip was read in), m, cm, mm, inch"};
-  units.choices = {"source", "m", "cm", "mm", "inch"};
-  spec.params.push_back(units);
-  ParamSpec precision{"precision", ParamType::Int, std::int64_t{6},
-                      "digits after the decimal point (trailing zeros dropped)"};
-  precision.min = 1;
-  precision.max = 12;
-  spec.params.push_back(precision);
-  return spec;
+graph::NodeSpec export_spec() {
+  using graph::ParamType;
+  return {
+      .type = "io.export_bvh",
+      .version = 1,
+      .doc =
+          "Writes a clip as BVH (file axes, degrees, the skeleton's channel orders), atomically. Reading it "
+          "back gives the same values to the printed precision.",
+      .inputs = {{"motion", "kg.Motion", true, "the clip to write"}},
+      .params = {{.name = "path",
+                  .type = ParamType::OutputPath,
+                  .default_value = std::string{},
+                  .doc = "the .bvh file to write",
+                  .required = true},
+                 {.name = "units",
+                  .type = ParamType::Enum,
+                  .default_value = std::string("source"),
+                  .doc = "length unit written: source (the unit the clip was read in), m, cm, mm, inch",
+                  .choices = {"source", "m", "cm", "mm", "inch"}},
+                 {.name = "precision",
+                  .type = ParamType::Int,
+                  .default_value = std::int64_t{6},
+                  .doc = "digits after the decimal point (trailing zeros dropped)",
+                  .min = 1,
+                  .max = 12}},
+  };
 }
 
 }  // namespace
 
 std::vector<graph::NodeType> bvh_node_types() {
   return {
-      {import_spec(), [](const Params& p) { return std::make_unique<ImportBvhNode>(p); }},
-      {export_spec(), [](const Params& p) { return std::make_unique<ExportBvhNode>(p); }},
+      {import_spec(), [](const graph::Params& p) { return std::make_unique<ImportBvhNode>(p); }},
+      {export_spec(), [](const graph::Params& p) { return std::make_unique<ExportBvhNode>(p); }},
   };
 }
 

@@ -460,9 +460,9 @@ BvhClip read_bvh(const std::filesystem::path& path) {
   return parse_bvh(text, name);
 }
 
-BvhImport import_bvh(const std::filesystem::path& path, const ImportOptions& options) {
+ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions& options) {
   BvhClip clip = read_bvh(path);
-  BvhImport out;
+  ImportedMotion out;
   out.file_frame_time = clip.frame_time;
   out.notes = apply_import_options(clip.motion, options, 1.0 / clip.frame_time, path.string());
   out.motion = std::move(clip.motion);

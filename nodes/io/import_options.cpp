@@ -120,19 +120,24 @@ std::string up_axis_name(const Eigen::Matrix3d& file_to_world) {
 
 std::vector<graph::ParamSpec> import_option_params(const std::string& default_units) {
   check_units_name(default_units, true);
-  using graph::ParamSpec;
   using graph::ParamType;
-  ParamSpec units{"units", ParamType::Enum, default_units,
-                  "length unit of the file: auto (the file's declaration, else guessed from the "
-                  "standing height, and said so), m, cm, mm, inch, asf (2.54/45 m, ASF's length 0.45)"};
-  units.choices = {"auto", "m", "cm", "mm", "inch", "asf"};
-  ParamSpec up{"up", ParamType::Enum, std::string("auto"),
-               "file axis pointing up: auto (from frame 0's extents, said so), y, z (rotated to +Y)"};
-  up.choices = {"auto", "y", "z"};
-  ParamSpec fps{"fps", ParamType::Float, 0.0,
-                "frames per second overriding the file's (files lie); 0 keeps the file's"};
-  fps.min = 0.0;
-  return {units, up, fps};
+  return {
+      {.name = "units",
+       .type = ParamType::Enum,
+       .default_value = default_units,
+       .doc = "length unit of the file: auto (the file's declaration, else guessed from the standing height, "
+              "and said so), m, cm, mm, inch, asf (2.54/45 m, ASF's length 0.45)",
+       .choices = {"auto", "m", "cm", "mm", "inch", "asf"}},
+      {.name = "up",
+       .type = ParamType::Enum,
+       .default_value = std::string("auto"),
+       .doc = "file axis pointing up: auto (from frame 0's extents, said so), y, z (rotated to +Y)",
+       .choices = {"auto", "y", "z"}},
+      {.name = "fps",
+       .type = ParamType::Float,
+       .default_value = 0.0,
+       .doc = "frames per second overriding the file's (files lie); 0 keeps the file's",
+       .min = 0.0}};
 }
 
 ImportOptions import_options_from(const graph::Params& params) {

@@ -12,18 +12,9 @@ namespace kg {
 
 namespace {
 
-using graph::Node;
-using graph::NodeSpec;
-using graph::NodeType;
-using graph::Params;
-using graph::ParamSpec;
-using graph::ParamType;
-using graph::PortSpec;
-using graph::RunContext;
-
-class ResampleNode final : public Node {
+class ResampleNode final : public graph::Node {
  public:
-  explicit ResampleNode(const Params& params) : fps_(params.get<double>("fps")) {
+  explicit ResampleNode(const graph::Params& params) : fps_(params.get<double>("fps")) {
     if (!std::isfinite(fps_) || fps_ < 0) {
       std::ostringstream s;
       s << "fps " << fps_ << ": expected a frame rate > 0, or 0 to keep the clip's";
@@ -31,7 +22,7 @@ class ResampleNode final : public Node {
     }
   }
 
-  void run(RunContext& ctx) const override {
+  void run(graph::RunContext& ctx) const override {
     const auto& in = ctx.input<motion::Motion>("motion");
     // fps 0 lets a graph variable switch resampling off (graphs/convert.yaml's `resample`).
     motion::Motion out = fps_ > 0 ? motion::resample(in, fps_) : in;
@@ -47,26 +38,28 @@ class ResampleNode final : public Node {
   double fps_;
 };
 
-NodeType resample_type() {
-  NodeSpec spec;
-  spec.type = "motion.resample";
-  spec.version = 1;
-  spec.doc =
-      "Resamples a clip to another frame rate, keeping its duration: floor(duration * fps) + 1 frames. "
-      "Positions are interpolated linearly; each joint's rotations are slerped and converted back to its "
-      "own Euler order, continuous with the previous frame. Frames at times the input has are copied.";
-  spec.inputs = {{"motion", "kg.Motion", true, "the clip (metres, radians)"}};
-  spec.outputs = {{"motion", "kg.Motion", true, "the clip at `fps`, same skeleton and name"}};
-  ParamSpec fps;
-  fps.name = "fps";
-  fps.type = ParamType::Float;
-  fps.default_value = 30.0;
-  fps.doc = "new frame rate, frames per second (e.g. 30 for the paper's 120 Hz captures); 0 keeps the clip as it is";
-  fps.required = true;
-  fps.min = 0;
-  fps.max = 1e5;
-  spec.params = {fps};
-  return {spec, [](const Params& p) { return std::make_unique<ResampleNode>(p); }};
+graph::NodeType resample_type() {
+  graph::NodeSpec spec{
+      .type = "motion.resample",
+      .version = 1,
+      .doc =
+          "Resamples a clip to another frame rate, keeping its duration: floor(duration * fps) + 1 frames. "
+          "Positions are interpolated linearly; each joint's rotations are slerped and converted back to "
+          "its own Euler order, continuous with the previous frame. Frames at times the input has are "
+          "copied.",
+      .inputs = {{"motion", "kg.Motion", true, "the clip (metres, radians)"}},
+      .outputs = {{"motion", "kg.Motion", true, "the clip at `fps`, same skeleton and name"}},
+      .params = {{.name = "fps",
+                  .type = graph::ParamType::Float,
+                  .default_value = 30.0,
+                  .doc =
+                      "new frame rate, frames per second (e.g. 30 for the paper's 120 Hz captures); 0 keeps "
+                      "the clip as it is",
+                  .required = true,
+                  .min = 0,
+                  .max = 1e5}},
+  };
+  return {spec, [](const graph::Params& p) { return std::make_unique<ResampleNode>(p); }};
 }
 
 }  // namespace

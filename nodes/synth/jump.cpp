@@ -7,7 +7,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-#include <tuple>
 
 #include "kg/synth/synthesize.hpp"
 #include "synth_detail.hpp"
@@ -369,43 +368,24 @@ Synthesis synthesize_jump(const JumpOptions& options) {
   const double t_heel = plan.t_heel, t_off = plan.t_off, t_land = plan.t_land, end = plan.end;
 
   const int frames = static_cast<int>(std::lround(end * options.fps)) + 1;
-  out.motion.skeleton = fig.skeleton;
-  out.motion.fps = options.fps;
-  out.motion.name = "synth_jump";
-  out.motion.values.resize(frames, fig.skeleton->channel_count());
-  for (int f = 0; f < frames; ++f) {
-    const double e = writer.write(plan.pose(f / options.fps), out.motion.values.row(f).data());
-    out.max_leg_extension = std::max(out.max_leg_extension, e);
-  }
-  out.motion.check();
+  out.max_leg_extension = write_frames(
+      writer, fig, [&](double t) { return plan.pose(t); }, frames, options.fps, "synth_jump", out.motion);
   if (out.max_leg_extension > 0.999)
     throw std::logic_error("synthesize_jump: the legs cannot follow the planned jump");
 
   const double t_end = (frames - 1) / options.fps;
+  PlantRecorder plants(fig, options.fps, frames, out.plants);
   for (Side side : {kLeft, kRight}) {
-    auto add = [&](FootPoint point, int joint, const Eigen::Vector3d& local, double t0, double t1,
-                   const Eigen::Vector3d& world) {
-      FootPlant plant;
-      plant.side = side;
-      plant.point = point;
-      plant.joint = joint;
-      plant.local = local;
-      std::tie(plant.first_frame, plant.last_frame) = frame_span(t0, std::min(t1, t_end), options.fps);
-      plant.world = world;
-      if (plant.first_frame <= plant.last_frame) out.plants.push_back(plant);
-    };
     const Eigen::Matrix3d R = rot_y(yaw[side]);
-    add(FootPoint::Heel, fig.foot[side], fig.heel_local, 0, t_heel,
-        geo.heel_when_flat(ankle_start[side], yaw[side]));
-    add(FootPoint::Ankle, fig.foot[side], fig.ankle_local, 0, t_heel, ankle_start[side]);
-    add(FootPoint::Ball, fig.toe[side], fig.ball_local, 0, t_off, ball_start[side]);
-    add(FootPoint::Toe, fig.toe[side], fig.toe_tip_local, 0, t_off, ball_start[side] + R * fig.toe_tip_local);
-    add(FootPoint::Heel, fig.foot[side], fig.heel_local, t_land + heel_drop, t_end,
-        geo.heel_when_flat(ankle_land[side], yaw[side]));
-    add(FootPoint::Ankle, fig.foot[side], fig.ankle_local, t_land + heel_drop, t_end, ankle_land[side]);
-    add(FootPoint::Ball, fig.toe[side], fig.ball_local, t_land, t_end, ball_land[side]);
-    add(FootPoint::Toe, fig.toe[side], fig.toe_tip_local, t_land, t_end,
-        ball_land[side] + R * fig.toe_tip_local);
+    plants.add(side, FootPoint::Heel, 0, t_heel, geo.heel_when_flat(ankle_start[side], yaw[side]));
+    plants.add(side, FootPoint::Ankle, 0, t_heel, ankle_start[side]);
+    plants.add(side, FootPoint::Ball, 0, t_off, ball_start[side]);
+    plants.add(side, FootPoint::Toe, 0, t_off, ball_start[side] + R * fig.toe_tip_local);
+    plants.add(side, FootPoint::Heel, t_land + heel_drop, t_end,
+               geo.heel_when_flat(ankle_land[side], yaw[side]));
+    plants.add(side, FootPoint::Ankle, t_land + heel_drop, t_end, ankle_land[side]);
+    plants.add(side, FootPoint::Ball, t_land, t_end, ball_land[side]);
+    plants.add(side, FootPoint::Toe, t_land, t_end, ball_land[side] + R * fig.toe_tip_local);
   }
   std::stable_sort(out.plants.begin(), out.plants.end(), [](const FootPlant& a, const FootPlant& b) {
     if (a.side != b.side) return a.side < b.side;

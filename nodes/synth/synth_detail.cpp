@@ -5,6 +5,7 @@
 #include <numbers>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 #include "kg/motion/rotations.hpp"
 
@@ -277,6 +278,34 @@ double PoseWriter::write(const BodyPose& pose, double* frame) {
     frame[tc + 2] = 0;
   }
   return worst;
+}
+
+double write_frames(PoseWriter& writer, const Figure& figure, const std::function<BodyPose(double)>& pose_at,
+                    int frames, double fps, const std::string& name, motion::Motion& motion) {
+  motion.skeleton = figure.skeleton;
+  motion.fps = fps;
+  motion.name = name;
+  motion.values.resize(frames, figure.skeleton->channel_count());
+  double worst = 0;
+  for (int f = 0; f < frames; ++f)
+    worst = std::max(worst, writer.write(pose_at(f / fps), motion.values.row(f).data()));
+  motion.check();
+  return worst;
+}
+
+void PlantRecorder::add(Side side, FootPoint point, double t0, double t1, const Eigen::Vector3d& world) {
+  const bool on_foot = point == FootPoint::Heel || point == FootPoint::Ankle;
+  FootPlant plant;
+  plant.side = side;
+  plant.point = point;
+  plant.joint = on_foot ? figure_.foot[side] : figure_.toe[side];
+  plant.local = point == FootPoint::Heel    ? figure_.heel_local
+                : point == FootPoint::Ankle ? figure_.ankle_local
+                : point == FootPoint::Ball  ? figure_.ball_local
+                                            : figure_.toe_tip_local;
+  std::tie(plant.first_frame, plant.last_frame) = frame_span(t0, std::min(t1, t_end_), fps_);
+  plant.world = world;
+  if (plant.first_frame <= plant.last_frame) plants_.push_back(plant);
 }
 
 double root_height_for(const PoseWriter& writer, BodyPose pose, double extension, double lo, double hi) {

@@ -1,15 +1,19 @@
 // Private pieces shared by the walk and jump synthesizers: C1 curves in time, the foot's rigid
-// rolling geometry, and the writer turning a world-space body pose into one frame of channels
-// (two-link leg IK included). Not installed; only nodes/synth/*.cpp include it.
+// rolling geometry, the writer turning a world-space body pose into one frame of channels
+// (two-link leg IK included), and the clip and foot plants built from them. Not installed; only
+// nodes/synth/*.cpp include it.
 #pragma once
 
 #include <array>
+#include <functional>
+#include <string>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Geometry>
 
 #include "kg/synth/figure.hpp"
+#include "kg/synth/synthesize.hpp"
 
 namespace kg::synth::detail {
 
@@ -132,6 +136,27 @@ class PoseWriter {
 
   const Figure& figure_;
   std::vector<Eigen::Vector3d> previous_;  // per joint, ZXY angles of the previous frame
+};
+
+// Fills `motion` with `frames` frames of the poses pose_at(f / fps) (the figure's skeleton, fps,
+// `name`) through `writer`, and checks it. Returns the largest leg extension writer.write met.
+double write_frames(PoseWriter& writer, const Figure& figure, const std::function<BodyPose(double)>& pose_at,
+                    int frames, double fps, const std::string& name, motion::Motion& motion);
+
+// Appends the foot plants of a clip of `frames` frames at `fps` to `plants`: each a point held at
+// `world` (metres) from t0 to t1 (seconds), cut at the last frame and dropped when that span holds
+// no frame. Heel and ankle are points of the foot joint, ball and toe tip of the toe joint (the
+// Figure's landmarks).
+class PlantRecorder {
+ public:
+  PlantRecorder(const Figure& figure, double fps, int frames, std::vector<FootPlant>& plants)
+      : figure_(figure), fps_(fps), t_end_((frames - 1) / fps), plants_(plants) {}
+  void add(Side side, FootPoint point, double t0, double t1, const Eigen::Vector3d& world);
+
+ private:
+  const Figure& figure_;
+  double fps_, t_end_;
+  std::vector<FootPlant>& plants_;
 };
 
 // Largest root height in [lo, hi] (bisection, all else fixed) at which both legs of `pose` reach

@@ -10,17 +10,9 @@ namespace kg {
 
 namespace {
 
-using graph::Node;
-using graph::NodeSpec;
-using graph::NodeType;
-using graph::Params;
-using graph::ParamSpec;
-using graph::ParamType;
-using graph::RunContext;
-
-class SynthesizeNode final : public Node {
+class SynthesizeNode final : public graph::Node {
  public:
-  explicit SynthesizeNode(const Params& p)
+  explicit SynthesizeNode(const graph::Params& p)
       : jump_(p.get<std::string>("kind") == "jump"),
         walk_{static_cast<int>(p.get<std::int64_t>("steps")), p.get<double>("speed"),
               p.get<double>("stature"), p.get<double>("fps")},
@@ -31,7 +23,7 @@ class SynthesizeNode final : public Node {
       throw std::invalid_argument("kind '" + kind + "': expected walk or jump");
   }
 
-  void run(RunContext& ctx) const override {
+  void run(graph::RunContext& ctx) const override {
     synth::Synthesis s = jump_ ? synth::synthesize_jump(jump_options_) : synth::synthesize_walk(walk_);
     ctx.report("frames", static_cast<std::int64_t>(s.motion.frame_count()));
     ctx.report("seconds", s.motion.duration());
@@ -56,60 +48,72 @@ class SynthesizeNode final : public Node {
   synth::JumpOptions jump_options_;
 };
 
-ParamSpec float_param(const char* name, double value, synth::Range range, const char* doc) {
-  ParamSpec p;
-  p.name = name;
-  p.type = ParamType::Float;
-  p.default_value = value;
-  p.doc = doc;
-  p.min = range.min;
-  p.max = range.max;
-  return p;
-}
-
-NodeType synthesize_type() {
-  NodeSpec spec;
-  spec.type = "motion.synthesize";
-  spec.version = 1;
-  spec.doc =
-      "Synthesizes a human figure and a motion with exactly planted feet, for pipelines without captured "
-      "data. walk: starts standing, takes `steps` steps along +Z at `speed` (step length and cadence from a "
-      "walk-ratio gait relation), ends standing with the feet together; heel strike, foot flat, heel off, "
-      "toe "
-      "off, pelvis bob/sway/rotation, arm swing. jump: countermovement, push-off, ballistic flight of the "
-      "root "
-      "(y = y0 + v0 t - g t^2/2), landing and absorbing crouch. Metres, radians, world +Y up, floor y = 0.";
-  spec.outputs = {
-      {"motion", "kg.Motion", true, "the clip: 21 joints, ZXY rotation channels, metres, radians"},
-      {"skeleton", "kg.Skeleton", true,
-       "the figure (Hips, Spine, Chest, Neck, Head, Left/Right Shoulder, Arm, ForeArm, Hand, UpLeg, "
-       "Leg, Foot, ToeBase)"}};
-  ParamSpec kind;
-  kind.name = "kind";
-  kind.type = ParamType::Enum;
-  kind.default_value = std::string("walk");
-  kind.doc = "walk or jump";
-  kind.choices = {"walk", "jump"};
-  ParamSpec steps;
-  steps.name = "steps";
-  steps.type = ParamType::Int;
-  steps.default_value = std::int64_t{8};
-  steps.doc = "walk: foot landings, the first from standing, the last bringing the feet together";
-  steps.min = synth::kStepsRange.min;
-  steps.max = synth::kStepsRange.max;
-  spec.params = {
-      kind,
-      steps,
-      float_param("speed", 1.3, synth::kSpeedRange, "walk: steady walking speed, m/s"),
-      float_param("stature", 1.75, synth::kStatureRange, "standing height of the figure, m"),
-      float_param("fps", 120, synth::kFpsRange, "frames per second"),
-      float_param("jump_height", 0.3, synth::kJumpHeightRange,
-                  "jump: rise of the root from takeoff to apex, m"),
-      float_param("jump_distance", 0.8, synth::kJumpDistanceRange,
-                  "jump: forward travel of the feet, m (0: a vertical jump)"),
-      float_param("gravity", 9.81, synth::kGravityRange, "jump: gravitational acceleration, m/s^2"),
+graph::NodeType synthesize_type() {
+  using graph::ParamType;
+  graph::NodeSpec spec{
+      .type = "motion.synthesize",
+      .version = 1,
+      .doc =
+          "Synthesizes a human figure and a motion with exactly planted feet, for pipelines without "
+          "captured data. walk: starts standing, takes `steps` steps along +Z at `speed` (step length and "
+          "cadence from a walk-ratio gait relation), ends standing with the feet together; heel strike, "
+          "foot flat, heel off, toe off, pelvis bob/sway/rotation, arm swing. jump: countermovement, "
+          "push-off, ballistic flight of the root (y = y0 + v0 t - g t^2/2), landing and absorbing crouch. "
+          "Metres, radians, world +Y up, floor y = 0.",
+      .outputs =
+          {{"motion", "kg.Motion", true, "the clip: 21 joints, ZXY rotation channels, metres, radians"},
+           {"skeleton", "kg.Skeleton", true,
+            "the figure (Hips, Spine, Chest, Neck, Head, Left/Right Shoulder, Arm, ForeArm, Hand, UpLeg, "
+            "Leg, Foot, ToeBase)"}},
+      .params = {{.name = "kind",
+                  .type = ParamType::Enum,
+                  .default_value = std::string("walk"),
+                  .doc = "walk or jump",
+                  .choices = {"walk", "jump"}},
+                 {.name = "steps",
+                  .type = ParamType::Int,
+                  .default_value = std::int64_t{8},
+                  .doc = "walk: foot landings, the first from standing, the last bringing the feet together",
+                  .min = synth::kStepsRange.min,
+                  .max = synth::kStepsRange.max},
+                 {.name = "speed",
+                  .type = ParamType::Float,
+                  .default_value = 1.3,
+                  .doc = "walk: steady walking speed, m/s",
+                  .min = synth::kSpeedRange.min,
+                  .max = synth::kSpeedRange.max},
+                 {.name = "stature",
+                  .type = ParamType::Float,
+                  .default_value = 1.75,
+                  .doc = "standing height of the figure, m",
+                  .min = synth::kStatureRange.min,
+                  .max = synth::kStatureRange.max},
+                 {.name = "fps",
+                  .type = ParamType::Float,
+                  .default_value = 120.0,
+                  .doc = "frames per second",
+                  .min = synth::kFpsRange.min,
+                  .max = synth::kFpsRange.max},
+                 {.name = "jump_height",
+                  .type = ParamType::Float,
+                  .default_value = 0.3,
+                  .doc = "jump: rise of the root from takeoff to apex, m",
+                  .min = synth::kJumpHeightRange.min,
+                  .max = synth::kJumpHeightRange.max},
+                 {.name = "jump_distance",
+                  .type = ParamType::Float,
+                  .default_value = 0.8,
+                  .doc = "jump: forward travel of the feet, m (0: a vertical jump)",
+                  .min = synth::kJumpDistanceRange.min,
+                  .max = synth::kJumpDistanceRange.max},
+                 {.name = "gravity",
+                  .type = ParamType::Float,
+                  .default_value = 9.81,
+                  .doc = "jump: gravitational acceleration, m/s^2",
+                  .min = synth::kGravityRange.min,
+                  .max = synth::kGravityRange.max}},
   };
-  return {spec, [](const Params& p) { return std::make_unique<SynthesizeNode>(p); }};
+  return {spec, [](const graph::Params& p) { return std::make_unique<SynthesizeNode>(p); }};
 }
 
 }  // namespace

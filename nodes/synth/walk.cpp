@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <stdexcept>
-#include <tuple>
 
 #include "kg/synth/synthesize.hpp"
 #include "synth_detail.hpp"
@@ -367,40 +366,22 @@ Synthesis synthesize_walk(const WalkOptions& options) {
   }
   const Curve height = height_curve(low, lo);
 
-  out.motion.skeleton = fig.skeleton;
-  out.motion.fps = options.fps;
-  out.motion.name = "synth_walk";
-  out.motion.values.resize(frames, fig.skeleton->channel_count());
-  for (int f = 0; f < frames; ++f) {
-    const double e = writer.write(pose_at(f / options.fps, height), out.motion.values.row(f).data());
-    out.max_leg_extension = std::max(out.max_leg_extension, e);
-  }
-  out.motion.check();
+  out.max_leg_extension = write_frames(
+      writer, fig, [&](double t) { return pose_at(t, height); }, frames, options.fps, "synth_walk",
+      out.motion);
 
   // Plants: heel from strike to heel off, ankle from foot flat to heel off, ball and toe tip from
   // foot flat to toe off.
-  const double t_end = (frames - 1) / options.fps;
+  PlantRecorder plants(fig, options.fps, frames, out.plants);
   for (Side side : {kLeft, kRight}) {
     for (const Footprint& p : feet[side].prints()) {
       const Eigen::Vector3d ball = geo.ball_when_flat(p.ankle, p.yaw);
       const double flat = std::max(p.flat, 0.0);
-      auto add = [&](FootPoint point, int joint, const Eigen::Vector3d& local, double t0, double t1,
-                     const Eigen::Vector3d& world) {
-        FootPlant plant;
-        plant.side = side;
-        plant.point = point;
-        plant.joint = joint;
-        plant.local = local;
-        std::tie(plant.first_frame, plant.last_frame) = frame_span(t0, std::min(t1, t_end), options.fps);
-        plant.world = world;
-        if (plant.first_frame <= plant.last_frame) out.plants.push_back(plant);
-      };
-      add(FootPoint::Heel, fig.foot[side], fig.heel_local, std::max(p.strike, 0.0), p.heel_off,
-          geo.heel_when_flat(p.ankle, p.yaw));
-      add(FootPoint::Ankle, fig.foot[side], fig.ankle_local, flat, p.heel_off, p.ankle);
-      add(FootPoint::Ball, fig.toe[side], fig.ball_local, flat, p.toe_off, ball);
-      add(FootPoint::Toe, fig.toe[side], fig.toe_tip_local, flat, p.toe_off,
-          ball + rot_y(p.yaw) * fig.toe_tip_local);
+      plants.add(side, FootPoint::Heel, std::max(p.strike, 0.0), p.heel_off,
+                 geo.heel_when_flat(p.ankle, p.yaw));
+      plants.add(side, FootPoint::Ankle, flat, p.heel_off, p.ankle);
+      plants.add(side, FootPoint::Ball, flat, p.toe_off, ball);
+      plants.add(side, FootPoint::Toe, flat, p.toe_off, ball + rot_y(p.yaw) * fig.toe_tip_local);
     }
   }
   out.steps = n;

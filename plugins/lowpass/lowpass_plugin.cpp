@@ -25,53 +25,52 @@ using motion::Motion;
 enum class Channels { All, Rotations, Positions };
 
 NodeSpec lowpass_spec() {
-  NodeSpec spec;
-  spec.type = "filter.lowpass";
-  spec.version = 1;
-  spec.doc =
-      "Zero-phase low-pass filter of every selected channel curve of a motion. butterworth: the "
-      "digital Butterworth filter (bilinear transform, prewarped) run forward and backward, so the "
-      "response is its magnitude squared: no phase lag, effective order 2 x order, cutoff_hz passed "
-      "at half amplitude (-6 dB). gaussian: a Gaussian kernel, by default of the width that also "
-      "passes cutoff_hz at half amplitude. Both extend the ends by odd reflection (as "
-      "scipy.signal.filtfilt does): constants stay exactly constant and lines straight, with no edge "
-      "transient; as in scipy the first and last frames are kept as they are. Rotation "
-      "channels are unwrapped (2 pi jumps removed) before filtering and put back on the input's "
-      "branch frame by frame after; Euler-angle flips other than 2 pi jumps are not detected.";
-  spec.inputs = {{"motion", "kg.Motion", true, "the clip to smooth"}};
-  spec.outputs = {{"motion", "kg.Motion", true, "the smoothed clip: same skeleton, frames and rate"}};
-  spec.params = {
-      {.name = "method",
-       .type = ParamType::Enum,
-       .default_value = std::string("butterworth"),
-       .doc = "butterworth (forward-backward IIR) or gaussian (kernel)",
-       .choices = {"butterworth", "gaussian"}},
-      {.name = "cutoff_hz",
-       .type = ParamType::Float,
-       .default_value = 6.0,
-       .doc = "Hz, > 0 and below the Nyquist frequency (half the motion's fps): the frequency passed at "
-              "half amplitude",
-       .min = 0.0},
-      {.name = "order",
-       .type = ParamType::Int,
-       .default_value = std::int64_t{2},
-       .doc = "butterworth: order of one pass, 2 or 4 (forward-backward doubles it to 4 or 8)",
-       .min = 2.0,
-       .max = 4.0},
-      {.name = "sigma_frames",
-       .type = ParamType::Float,
-       .default_value = 0.0,
-       .doc = "gaussian: kernel standard deviation in frames; 0 derives it from cutoff_hz "
-              "(sigma = fps * sqrt(ln 2 / 2) / (pi cutoff_hz))",
-       .min = 0.0,
-       .max = 1e5},
-      {.name = "channels",
-       .type = ParamType::Enum,
-       .default_value = std::string("all"),
-       .doc = "which channels to filter: all, rotations (radians) or positions (metres)",
-       .choices = {"all", "rotations", "positions"}},
+  return {
+      .type = "filter.lowpass",
+      .version = 1,
+      .doc =
+          "Zero-phase low-pass filter of every selected channel curve of a motion. butterworth: the "
+          "digital Butterworth filter (bilinear transform, prewarped) run forward and backward, so the "
+          "response is its magnitude squared: no phase lag, effective order 2 x order, cutoff_hz passed "
+          "at half amplitude (-6 dB). gaussian: a Gaussian kernel, by default of the width that also "
+          "passes cutoff_hz at half amplitude. Both extend the ends by odd reflection (as "
+          "scipy.signal.filtfilt does): constants stay exactly constant and lines straight, with no edge "
+          "transient; as in scipy the first and last frames are kept as they are. Rotation "
+          "channels are unwrapped (2 pi jumps removed) before filtering and put back on the input's "
+          "branch frame by frame after; Euler-angle flips other than 2 pi jumps are not detected.",
+      .inputs = {{"motion", "kg.Motion", true, "the clip to smooth"}},
+      .outputs = {{"motion", "kg.Motion", true, "the smoothed clip: same skeleton, frames and rate"}},
+      .params =
+          {{.name = "method",
+            .type = ParamType::Enum,
+            .default_value = std::string("butterworth"),
+            .doc = "butterworth (forward-backward IIR) or gaussian (kernel)",
+            .choices = {"butterworth", "gaussian"}},
+           {.name = "cutoff_hz",
+            .type = ParamType::Float,
+            .default_value = 6.0,
+            .doc = "Hz, > 0 and below the Nyquist frequency (half the motion's fps): the frequency passed at "
+                   "half amplitude",
+            .min = 0.0},
+           {.name = "order",
+            .type = ParamType::Int,
+            .default_value = std::int64_t{2},
+            .doc = "butterworth: order of one pass, 2 or 4 (forward-backward doubles it to 4 or 8)",
+            .min = 2.0,
+            .max = 4.0},
+           {.name = "sigma_frames",
+            .type = ParamType::Float,
+            .default_value = 0.0,
+            .doc = "gaussian: kernel standard deviation in frames; 0 derives it from cutoff_hz "
+                   "(sigma = fps * sqrt(ln 2 / 2) / (pi cutoff_hz))",
+            .min = 0.0,
+            .max = 1e5},
+           {.name = "channels",
+            .type = ParamType::Enum,
+            .default_value = std::string("all"),
+            .doc = "which channels to filter: all, rotations (radians) or positions (metres)",
+            .choices = {"all", "rotations", "positions"}}},
   };
-  return spec;
 }
 
 class LowpassNode final : public graph::Node {

@@ -4,6 +4,7 @@
 
 #include <sstream>
 
+#include "../support/temp_dir.hpp"
 #include "kg/graph/atomic_file.hpp"
 #include "kg/graph/error.hpp"
 #include "kg/graph/json.hpp"
@@ -12,7 +13,8 @@
 #include "test_nodes.hpp"
 
 using namespace kg::graph;
-using kg_test::TempDir;
+using kg::test::read_file;
+using kg::test::TempDir;
 
 namespace {
 
@@ -281,18 +283,18 @@ TEST_CASE("JsonWriter pretty-prints with an indent") {
 
 TEST_CASE("write_file_atomically writes, replaces, and creates folders") {
   TempDir dir;
-  const auto target = dir.path / "sub" / "deeper" / "out.txt";
+  const auto target = dir / "sub" / "deeper" / "out.txt";
   write_file_atomically(target, [](std::ostream& os) { os << "first"; });
-  CHECK(kg_test::read_all(target) == "first");
+  CHECK(read_file(target) == "first");
   write_file_atomically(target, [](std::ostream& os) { os << "second, longer"; });
-  CHECK(kg_test::read_all(target) == "second, longer");
-  CHECK(temp_files_in(dir.path).empty());
+  CHECK(read_file(target) == "second, longer");
+  CHECK(temp_files_in(dir.path()).empty());
 }
 
 TEST_CASE("write_file_atomically leaves the target untouched when the writer throws") {
   TempDir dir;
-  const auto target = dir.path / "out.txt";
-  kg_test::write_all(target, "original");
+  const auto target = dir / "out.txt";
+  dir.write("out.txt", "original");
   try {
     write_file_atomically(target, [](std::ostream& os) {
       os << "half written";
@@ -310,23 +312,23 @@ TEST_CASE("write_file_atomically leaves the target untouched when the writer thr
     }
     CHECK(nested_found);
   }
-  CHECK(kg_test::read_all(target) == "original");
-  CHECK(temp_files_in(dir.path).empty());
+  CHECK(read_file(target) == "original");
+  CHECK(temp_files_in(dir.path()).empty());
 
   // A stream put into a failed state counts as a failure too.
   CHECK_THROWS_WITH(write_file_atomically(target, [](std::ostream& os) { os.setstate(std::ios::badbit); }),
                     Catch::Contains(target.string()));
-  CHECK(kg_test::read_all(target) == "original");
-  CHECK(temp_files_in(dir.path).empty());
+  CHECK(read_file(target) == "original");
+  CHECK(temp_files_in(dir.path()).empty());
 }
 
 TEST_CASE("write_file_atomically refuses a directory target and an unwritable place") {
   TempDir dir;
-  CHECK_THROWS_WITH(write_file_atomically(dir.path, [](std::ostream& os) { os << "x"; }),
-                    Catch::Contains(dir.path.string()));
-  kg_test::write_all(dir.path / "file", "x");
+  CHECK_THROWS_WITH(write_file_atomically(dir.path(), [](std::ostream& os) { os << "x"; }),
+                    Catch::Contains(dir.path().string()));
+  dir.write("file", "x");
   // A parent that is a file cannot be created as a directory.
-  CHECK_THROWS_WITH(write_file_atomically(dir.path / "file" / "out.txt", [](std::ostream& os) { os << "x"; }),
+  CHECK_THROWS_WITH(write_file_atomically(dir / "file" / "out.txt", [](std::ostream& os) { os << "x"; }),
                     Catch::Contains("out.txt"));
-  CHECK(temp_files_in(dir.path).empty());
+  CHECK(temp_files_in(dir.path()).empty());
 }

@@ -3,6 +3,7 @@
 
 #include <iostream>
 
+#include "../support/temp_dir.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/yaml_io.hpp"
 #include "test_nodes.hpp"
@@ -334,10 +335,10 @@ connections:
   const Graph g = load_graph_from_string(text, "report.yaml", registry);
   Logged log;
   const RunResult r = run_graph(g, registry, log.options(1));
-  kg_test::TempDir dir;
-  const auto file = dir.path / "reports" / "run.json";
+  kg::test::TempDir dir;
+  const auto file = dir / "reports" / "run.json";
   write_report_json(file, g, r);
-  const std::string json = kg_test::read_all(file);
+  const std::string json = kg::test::read_file(file);
   CHECK_THAT(json, Catch::Contains("\"graph\": \"report.yaml\""));
   CHECK_THAT(json, Catch::Contains("\"ok\": false"));
   CHECK_THAT(json, Catch::Contains("\"variables\": {\n    \"msg\": \"it \\\"broke\\\"\"\n  }"));

@@ -2,16 +2,10 @@
 // anything of motion. Registered through the same Registry API as built-ins and plugins.
 #pragma once
 
-#include <unistd.h>
-
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
-#include <filesystem>
-#include <fstream>
 #include <mutex>
-#include <random>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <thread>
@@ -253,35 +247,6 @@ inline Registry test_registry(std::shared_ptr<Journal> journal = {},
   Registry r;
   register_test_nodes(r, std::move(journal), std::move(rendezvous));
   return r;
-}
-
-// A fresh directory under the system temp dir, removed with everything in it at scope end.
-struct TempDir {
-  std::filesystem::path path;
-  TempDir() {
-    std::random_device rd;
-    path = std::filesystem::temp_directory_path() /
-           ("kg_test_graph_" + std::to_string(::getpid()) + "_" + std::to_string(rd()));
-    std::filesystem::create_directories(path);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    std::filesystem::remove_all(path, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-};
-
-inline std::string read_all(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-inline void write_all(const std::filesystem::path& p, const std::string& text) {
-  std::ofstream out(p, std::ios::binary);
-  out << text;
 }
 
 }  // namespace kg_test

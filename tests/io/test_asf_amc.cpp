@@ -3,17 +3,16 @@
 // of the same take, the nodes, and a table of malformed inputs plus truncations of real files.
 #include <catch2/catch.hpp>
 
-#include <chrono>
 #include <cmath>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <map>
 #include <numbers>
 #include <sstream>
 #include <string>
 #include <vector>
 
+#include "../support/node_context.hpp"
+#include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/error.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -25,6 +24,10 @@ using kg::graph::Error;
 using kg::io::AsfSkeleton;
 using kg::motion::ChannelKind;
 using kg::motion::Motion;
+using kg::test::NodeContext;
+using kg::test::params_for;
+using kg::test::read_file;
+using kg::test::run_node;
 
 namespace {
 
@@ -41,13 +44,6 @@ bool have(const std::vector<fs::path>& files) {
     }
   }
   return true;
-}
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 std::string replaced(std::string text, const std::string& from, const std::string& to) {
@@ -239,43 +235,9 @@ std::vector<std::map<std::string, Eigen::Vector3d>> reference_positions(const st
   return out;
 }
 
-// A RunContext for running one node outside a graph.
-class TestContext final : public kg::graph::RunContext {
- public:
-  explicit TestContext(kg::graph::Params params) : params_(std::move(params)) {}
-  const std::string& node_id() const override { return id_; }
-  const kg::graph::Params& params() const override { return params_; }
-  const kg::graph::Value& input_value(const std::string&) const override { return empty_; }
-  void set_output(const std::string& port, kg::graph::Value value) override {
-    outputs[port] = std::move(value);
-  }
-  void report(const std::string& key, kg::graph::Figure value) override { reports[key] = std::move(value); }
-  void log(const std::string& message) override { logs.push_back(message); }
-
-  std::map<std::string, kg::graph::Value> outputs;
-  std::map<std::string, kg::graph::Figure> reports;
-  std::vector<std::string> logs;
-
- private:
-  std::string id_ = "test";
-  kg::graph::Params params_;
-  kg::graph::Value empty_;
-};
-
 const kg::graph::NodeType& node_type(const std::string& name) {
-  static const std::vector<kg::graph::NodeType> types = kg::asf_amc_node_types();
-  for (const auto& t : types)
-    if (t.spec.type == name) return t;
-  FAIL("no node type " << name);
-  return types.front();
-}
-
-kg::graph::Params params_for(const kg::graph::NodeSpec& spec,
-                             std::map<std::string, kg::graph::ParamValue> given) {
-  kg::graph::Params p;
-  for (const auto& ps : spec.params) p.set(ps.name, ps.default_value);
-  for (auto& [k, v] : given) p.set(k, v);
-  return p;
+  static const kg::graph::Registry registry = kg::test::registry_of(kg::asf_amc_node_types());
+  return kg::test::node_type(registry, name);
 }
 
 bool contains(const std::vector<std::string>& lines, const std::string& part) {
@@ -429,7 +391,7 @@ TEST_CASE("asf/amc: the three CMU pairs load", "[io][asf][data]") {
     CHECK(asf.notes.empty());
 
     // 29 bone lines per frame, counted in the text independently of the reader.
-    const std::string text = slurp(kAsfDir / p.amc);
+    const std::string text = read_file(kAsfDir / p.amc);
     std::istringstream in(text);
     std::string line;
     int frame_lines = 0, bone_lines = 0;
@@ -468,7 +430,7 @@ TEST_CASE("asf/amc: forward kinematics equals an independent mocapPlayer-style e
     const std::string subject = std::string(stem).substr(0, 2);
     const fs::path asf_path = kAsfDir / (subject + ".asf"), amc_path = kAsfDir / (std::string(stem) + ".amc");
     if (!have({asf_path, amc_path})) return;
-    const std::string asf_text = slurp(asf_path), amc_text = slurp(amc_path);
+    const std::string asf_text = read_file(asf_path), amc_text = read_file(amc_path);
     const AsfSkeleton asf = kg::io::parse_asf(asf_text, asf_path.string());
     const Motion m = kg::io::parse_amc(amc_text, amc_path.string(), asf);
     const Eigen::MatrixXd ours = kg::motion::joint_world_positions(m);  // file units (raw read)
@@ -629,41 +591,37 @@ TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][no
                  bvh = kData / "bvh_motionbuilder" / "16_15.bvh";
   if (!have({asf, amc, bvh})) return;
   {
-    TestContext ctx(params_for(asf_type.spec, {{"skeleton", asf.string()}, {"path", amc.string()}}));
-    asf_type.create(ctx.params())->run(ctx);
+    const NodeContext ctx =
+        run_node(asf_type, params_for(asf_type.spec, {{"skeleton", asf.string()}, {"path", amc.string()}}));
     const auto& m = ctx.outputs.at("motion").get<Motion>();
     CHECK(m.frame_count() == 471);
     CHECK(ctx.outputs.at("skeleton").get_shared<kg::motion::Skeleton>() == m.skeleton);
-    CHECK(std::get<std::int64_t>(ctx.reports.at("frames")) == 471);
-    CHECK(std::get<std::string>(ctx.reports.at("units")) == "asf");
-    CHECK(contains(ctx.logs, "120 fps"));
+    CHECK(std::get<std::int64_t>(ctx.figures.at("frames")) == 471);
+    CHECK(std::get<std::string>(ctx.figures.at("units")) == "asf");
+    CHECK(ctx.logged("120 fps"));
   }
   {  // the skeleton guessed from the subject prefix, and said so
-    TestContext ctx(params_for(any_type.spec, {{"path", amc.string()}}));
-    any_type.create(ctx.params())->run(ctx);
+    const NodeContext ctx = run_node(any_type, params_for(any_type.spec, {{"path", amc.string()}}));
     CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
-    CHECK(contains(ctx.logs, "16.asf"));
-    CHECK(contains(ctx.logs, "skeleton not given"));
+    CHECK(ctx.logged("16.asf"));
+    CHECK(ctx.logged("skeleton not given"));
   }
   {  // a .bvh dispatches to the BVH reader
-    TestContext ctx(params_for(any_type.spec, {{"path", bvh.string()}, {"up", std::string("y")}}));
-    any_type.create(ctx.params())->run(ctx);
+    const NodeContext ctx =
+        run_node(any_type, params_for(any_type.spec, {{"path", bvh.string()}, {"up", std::string("y")}}));
     CHECK(ctx.outputs.at("motion").get<Motion>().skeleton->find_joint("lhipjoint") < 0);
     CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
   }
   {  // an .amc without a findable .asf, a .bvh with a skeleton, an unknown extension
-    const fs::path dir = fs::temp_directory_path() / "kg_test_asf_nodes";
-    fs::create_directories(dir);
-    const fs::path lone = dir / "lone.amc";
-    std::ofstream(lone) << kAmc;
-    TestContext ctx(params_for(any_type.spec, {{"path", lone.string()}}));
-    auto node = any_type.create(ctx.params());
-    CHECK_THROWS_WITH(node->run(ctx), Catch::Contains("needs its skeleton"));
-    TestContext ctx2(params_for(any_type.spec, {{"path", bvh.string()}, {"skeleton", asf.string()}}));
-    CHECK_THROWS_WITH(any_type.create(ctx2.params())->run(ctx2), Catch::Contains("holds its own skeleton"));
-    TestContext ctx3(params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}}));
-    CHECK_THROWS_WITH(any_type.create(ctx3.params())->run(ctx3), Catch::Contains(".bvh or .amc"));
-    fs::remove_all(dir);
+    const kg::test::TempDir dir;
+    const fs::path lone = dir.write("lone.amc", kAmc);
+    CHECK_THROWS_WITH(run_node(any_type, params_for(any_type.spec, {{"path", lone.string()}})),
+                      Catch::Contains("needs its skeleton"));
+    CHECK_THROWS_WITH(
+        run_node(any_type, params_for(any_type.spec, {{"path", bvh.string()}, {"skeleton", asf.string()}})),
+        Catch::Contains("holds its own skeleton"));
+    CHECK_THROWS_WITH(run_node(any_type, params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}})),
+                      Catch::Contains(".bvh or .amc"));
   }
 }
 
@@ -812,7 +770,7 @@ TEST_CASE("asf/amc: every truncation of the real files fails cleanly or reads a 
           "[io][asf][errors][data]") {
   const fs::path asf_path = kAsfDir / "16.asf", amc_path = kAsfDir / "16_15.amc";
   if (!have({asf_path, amc_path})) return;
-  const std::string asf_text = slurp(asf_path), amc_text = slurp(amc_path);
+  const std::string asf_text = read_file(asf_path), amc_text = read_file(amc_path);
   const AsfSkeleton asf = kg::io::parse_asf(asf_text, "16.asf");
 
   // ASF: every prefix short of the closing `end` must fail with a place inside the prefix.
@@ -866,29 +824,4 @@ TEST_CASE("asf/amc: every truncation of the real files fails cleanly or reads a 
   }
   CHECK(amc_failures > 0);
   CHECK(amc_reads > 0);
-}
-
-// Timing, not part of the test run: ./test_io "[.bench]"
-TEST_CASE("asf/amc: parse time of 16_15.amc", "[.bench][asf]") {
-  const fs::path asf_path = kAsfDir / "16.asf", amc_path = kAsfDir / "16_15.amc";
-  if (!have({asf_path, amc_path})) return;
-  const std::string text = slurp(amc_path);
-  const AsfSkeleton asf = kg::io::read_asf(asf_path.string());
-  using Clock = std::chrono::steady_clock;
-  constexpr int kRuns = 50;
-  double best = 1e9, total = 0;
-  for (int i = 0; i < kRuns; ++i) {
-    const auto t0 = Clock::now();
-    const Motion m = kg::io::parse_amc(text, "16_15.amc", asf);
-    const double s = std::chrono::duration<double>(Clock::now() - t0).count();
-    REQUIRE(m.frame_count() == 471);
-    best = std::min(best, s);
-    total += s;
-  }
-  const auto t0 = Clock::now();
-  const Motion m = kg::io::read_amc(amc_path.string(), asf);
-  const double with_read = std::chrono::duration<double>(Clock::now() - t0).count();
-  std::cout << "parse_amc 16_15.amc (" << text.size() << " bytes, " << m.frame_count() << " frames): best "
-            << best * 1e3 << " ms, mean " << total / kRuns * 1e3 << " ms over " << kRuns << " runs ("
-            << text.size() / best / 1e6 << " MB/s); read_amc incl. file read " << with_read * 1e3 << " ms\n";
 }

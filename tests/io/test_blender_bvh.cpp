@@ -12,8 +12,7 @@
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
+#include "../support/temp_dir.hpp"
 #include "kg/graph/atomic_file.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -113,8 +112,7 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
     WARN("skipped: blender is not installed (apt-get install blender to run this test)");
     return;
   }
-  const fs::path dir = fs::temp_directory_path() / ("kg_test_blender_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  const kg::test::TempDir dir;
   const fs::path script = fs::path(KG_SOURCE_DIR) / "tests/io/blender_import_bvh.py";
 
   std::vector<std::pair<std::string, kg::motion::Motion>> clips;
@@ -136,7 +134,7 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
   }
   command += " > '" + (dir / "blender.log").string() + "' 2>&1";
   const int status = std::system(command.c_str());
-  INFO("command: " << command << "\nBlender's output:\n" << kg::test::slurp(dir / "blender.log"));
+  INFO("command: " << command << "\nBlender's output:\n" << kg::test::read_file(dir / "blender.log"));
   REQUIRE(status == 0);
 
   for (const auto& [name, m] : clips) {
@@ -150,5 +148,4 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
     WARN("Blender vs Kinegraph, " << name << ": worst joint distance " << worst * 1e3 << " mm over "
                                   << compared << " joint-frames");
   }
-  fs::remove_all(dir);
 }

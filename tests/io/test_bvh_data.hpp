@@ -3,9 +3,7 @@
 #pragma once
 
 #include <filesystem>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <string>
 #include <vector>
 
@@ -55,13 +53,6 @@ inline std::optional<std::filesystem::path> data_file(const std::string& relativ
   std::filesystem::path p = data_dir() / relative;
   if (!std::filesystem::exists(p)) return std::nullopt;
   return p;
-}
-
-inline std::string slurp(const std::filesystem::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
 }
 
 }  // namespace kg::test

@@ -189,7 +189,7 @@ TEST_CASE("import options: units auto on every BVH of ../shared/data, said in a 
       continue;
     }
     ++seen;
-    kg::io::BvhImport in = kg::io::import_bvh(*path, {});
+    kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
     INFO(f.path << "\n" << all(in.notes));
     const auto& s = *in.motion.skeleton;
     CHECK(kg::io::unit_name(s.source_unit_metres) == f.units);
@@ -215,7 +215,7 @@ TEST_CASE("import options: 16_15.bvh's root stands at 0.97 m, not the doubled 1.
     WARN("skipped: cmu/bvh_motionbuilder/16_15.bvh not found");
     return;
   }
-  kg::io::BvhImport in = kg::io::import_bvh(*path, {});
+  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
   auto points = world_points(in.motion, 0);
   CHECK(points[0].y() == Approx(0.97422).margin(1e-9));
   CHECK(points[0].x() == Approx(0.06939).margin(1e-9));
@@ -230,7 +230,7 @@ TEST_CASE("import options: Bandai files (6 channels per joint) stand at a human 
       continue;
     }
     INFO(rel);
-    kg::io::BvhImport in = kg::io::import_bvh(*path, {.units = "cm"});
+    kg::io::ImportedMotion in = kg::io::import_bvh(*path, {.units = "cm"});
     const auto& s = *in.motion.skeleton;
     for (const auto& j : s.joints()) CHECK(j.channels.size() == 6);
     const int hips = s.find_joint("Hips"), head = s.find_joint("Head");
@@ -253,14 +253,14 @@ TEST_CASE("import options: fps overrides a lying header (16_01.bvh is 120 fps, s
     WARN("skipped: cmu/bvh_cmu_names/16_01.bvh not found");
     return;
   }
-  kg::io::BvhImport in = kg::io::import_bvh(*path, {.fps = 120});
+  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {.fps = 120});
   INFO(all(in.notes));
   CHECK(in.motion.fps == 120.0);
   CHECK(in.motion.frame_count() == 322);
   CHECK(in.motion.duration() == Approx(321.0 / 120));
   CHECK(contains(in.notes, "16_01.bvh: fps 120 from the options; the file says 30.0003"));
   CHECK(contains(in.notes, "taken as asf ("));
-  kg::io::BvhImport header = kg::io::import_bvh(*path, {});
+  kg::io::ImportedMotion header = kg::io::import_bvh(*path, {});
   CHECK(header.motion.fps == Approx(30.0003));
   CHECK(!contains(header.notes, "fps"));
 }

@@ -3,65 +3,23 @@
 #include <catch2/catch.hpp>
 
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <string>
 #include <vector>
 
-#include <unistd.h>
-
+#include "../support/node_context.hpp"
+#include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/bvh.hpp"
-#include "test_bvh_data.hpp"
 
 namespace {
 
-using kg::graph::Figure;
-using kg::graph::Params;
-using kg::graph::Value;
-
-class TestContext final : public kg::graph::RunContext {
- public:
-  explicit TestContext(Params params) : params_(std::move(params)) {}
-  const std::string& node_id() const override { return id_; }
-  const Params& params() const override { return params_; }
-  const Value& input_value(const std::string& port) const override {
-    auto it = inputs.find(port);
-    return it == inputs.end() ? empty_ : it->second;
-  }
-  void set_output(const std::string& port, Value value) override { outputs[port] = std::move(value); }
-  void report(const std::string& key, Figure value) override { reports[key] = std::move(value); }
-  void log(const std::string& message) override { logs.push_back(message); }
-
-  std::map<std::string, Value> inputs, outputs;
-  std::map<std::string, Figure> reports;
-  std::vector<std::string> logs;
-
- private:
-  std::string id_ = "test";
-  Params params_;
-  Value empty_;
-};
+using kg::test::NodeContext;
+using kg::test::params_for;
 
 const kg::graph::NodeType& node_type(const std::string& name) {
-  static const std::vector<kg::graph::NodeType> types = kg::bvh_node_types();
-  for (const auto& t : types)
-    if (t.spec.type == name) return t;
-  FAIL("no node type " << name);
-  throw;
-}
-
-// The params as validation would hand them over: given ones plus the spec's defaults.
-Params with_defaults(const kg::graph::NodeSpec& spec, std::map<std::string, kg::graph::ParamValue> given) {
-  for (const auto& p : spec.params)
-    if (!p.required && !given.count(p.name)) given[p.name] = p.default_value;
-  return Params(std::move(given));
-}
-
-std::filesystem::path temp_dir() {
-  auto d = std::filesystem::temp_directory_path() / ("kg_test_bvh_nodes_" + std::to_string(::getpid()));
-  std::filesystem::create_directories(d);
-  return d;
+  static const kg::graph::Registry registry = kg::test::registry_of(kg::bvh_node_types());
+  return kg::test::node_type(registry, name);
 }
 
 }  // namespace
@@ -93,47 +51,43 @@ TEST_CASE("bvh nodes: specs declare ports and params") {
 }
 
 TEST_CASE("bvh nodes: import, report, export atomically, import again") {
-  const auto dir = temp_dir();
-  const auto in_path = dir / "small.bvh";
-  {
-    std::ofstream f(in_path);
-    f << "HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation "
-         "Xrotation "
-         "Yrotation\n JOINT knee\n {\n  OFFSET 0 -45 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End "
-         "Site\n"
-         "  {\n   OFFSET 0 -45 0\n  }\n }\n End Site\n {\n  OFFSET 0 80 0\n }\n}\nMOTION\nFrames: 3\n"
-         "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n";
-  }
+  const kg::test::TempDir dir;
+  const auto in_path = dir.write(
+      "small.bvh",
+      "HIERARCHY\nROOT hip\n{\n OFFSET 0 0 0\n CHANNELS 6 Xposition Yposition Zposition Zrotation "
+      "Xrotation "
+      "Yrotation\n JOINT knee\n {\n  OFFSET 0 -45 0\n  CHANNELS 3 Zrotation Xrotation Yrotation\n  End "
+      "Site\n"
+      "  {\n   OFFSET 0 -45 0\n  }\n }\n End Site\n {\n  OFFSET 0 80 0\n }\n}\nMOTION\nFrames: 3\n"
+      "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n");
   const auto& imp = node_type("io.import_bvh");
-  auto node = imp.create(with_defaults(imp.spec, {{"path", in_path.string()}, {"fps", 60.0}}));
-  TestContext ctx(Params{});
+  auto node = imp.create(params_for(imp.spec, {{"path", in_path.string()}, {"fps", 60.0}}));
+  NodeContext ctx;
   node->run(ctx);
   const auto& m = ctx.outputs.at("motion").get<kg::motion::Motion>();
   const auto& s = ctx.outputs.at("skeleton").get<kg::motion::Skeleton>();
   CHECK(&s == m.skeleton.get());
   CHECK(m.fps == 60.0);
-  CHECK(std::get<std::int64_t>(ctx.reports.at("frames")) == 3);
-  CHECK(std::get<std::int64_t>(ctx.reports.at("joints")) == 2);
-  CHECK(std::get<std::int64_t>(ctx.reports.at("channels")) == 9);
-  CHECK(std::get<double>(ctx.reports.at("fps")) == 60.0);
-  CHECK(std::get<double>(ctx.reports.at("seconds")) == Approx(2.0 / 60));
-  CHECK(std::get<std::string>(ctx.reports.at("units")) == "cm");
-  CHECK(std::get<std::string>(ctx.reports.at("up")) == "y");
+  CHECK(std::get<std::int64_t>(ctx.figures.at("frames")) == 3);
+  CHECK(std::get<std::int64_t>(ctx.figures.at("joints")) == 2);
+  CHECK(std::get<std::int64_t>(ctx.figures.at("channels")) == 9);
+  CHECK(std::get<double>(ctx.figures.at("fps")) == 60.0);
+  CHECK(std::get<double>(ctx.figures.at("seconds")) == Approx(2.0 / 60));
+  CHECK(std::get<std::string>(ctx.figures.at("units")) == "cm");
+  CHECK(std::get<std::string>(ctx.figures.at("up")) == "y");
   REQUIRE(ctx.logs.size() == 3);  // up, units, fps
   CHECK(ctx.logs[1].find("units auto: standing height 170 file units, taken as cm (1.70 m)") !=
         std::string::npos);
-  CHECK(std::get<std::string>(ctx.reports.at("notes")).find("taken as cm") != std::string::npos);
+  CHECK(std::get<std::string>(ctx.figures.at("notes")).find("taken as cm") != std::string::npos);
 
   const auto& exp = node_type("io.export_bvh");
   const auto out_path = dir / "sub" / "out.bvh";
-  auto writer =
-      exp.create(with_defaults(exp.spec, {{"path", out_path.string()}, {"units", std::string("m")}}));
-  TestContext wctx(Params{});
-  wctx.inputs["motion"] = ctx.outputs.at("motion");
-  writer->run(wctx);
-  CHECK(std::get<std::string>(wctx.reports.at("path")) == out_path.string());
-  CHECK(std::get<std::int64_t>(wctx.reports.at("frames")) == 3);
-  const std::string text = kg::test::slurp(out_path);
+  const NodeContext wctx = kg::test::run_node(
+      exp, params_for(exp.spec, {{"path", out_path.string()}, {"units", std::string("m")}}),
+      {{"motion", ctx.outputs.at("motion")}});
+  CHECK(std::get<std::string>(wctx.figures.at("path")) == out_path.string());
+  CHECK(std::get<std::int64_t>(wctx.figures.at("frames")) == 3);
+  const std::string text = kg::test::read_file(out_path);
   CHECK(text.find("\t\tOFFSET 0 -0.45 0\n") != std::string::npos);
   CHECK(text.find("Frame Time: 0.0166666667\n") != std::string::npos);
   CHECK(text.find("\n0.02 0.9 0 0 0 0 30 0 0\n") != std::string::npos);
@@ -143,10 +97,7 @@ TEST_CASE("bvh nodes: import, report, export atomically, import again") {
   CHECK(files == 1);
 
   // A malformed file fails the node with file:line.
-  {
-    std::ofstream f(in_path);
-    f << "HIERARCHY\nROOT hip\n{\n OFFSET 0 0\n";
-  }
+  dir.write("small.bvh", "HIERARCHY\nROOT hip\n{\n OFFSET 0 0\n");
   try {
     node->run(ctx);
     FAIL("no error");
@@ -154,5 +105,4 @@ TEST_CASE("bvh nodes: import, report, export atomically, import again") {
     INFO(e.what());
     CHECK(std::string(e.what()).find("small.bvh:4:12: expected OFFSET z of joint hip") != std::string::npos);
   }
-  std::filesystem::remove_all(dir);
 }

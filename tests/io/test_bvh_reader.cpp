@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/temp_dir.hpp"
 #include "kg/graph/error.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -319,7 +320,7 @@ TEST_CASE("bvh: truncated and corrupted real files fail with file:line, never cr
       WARN("skipped: " << rel << " not found");
       continue;
     }
-    const std::string text = kg::test::slurp(*path);
+    const std::string text = kg::test::read_file(*path);
     // The only successful truncations cut inside the last value, or the blanks after it.
     std::size_t last_value = text.find_last_not_of(" \t\r\n");
     while (last_value > 0 && text[last_value - 1] != ' ' && text[last_value - 1] != '\t') --last_value;

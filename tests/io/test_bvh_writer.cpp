@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/temp_dir.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
@@ -113,7 +114,7 @@ TEST_CASE("bvh writer: every file of ../shared/data round-trips exactly to the p
     }
     ++seen;
     INFO(f.path);
-    const std::string source = kg::test::slurp(*path);
+    const std::string source = kg::test::read_file(*path);
     auto clip = parse_bvh(source, path->string());
 
     // Written at the source's precision, every value equals the source's.
@@ -131,7 +132,7 @@ TEST_CASE("bvh writer: every file of ../shared/data round-trips exactly to the p
 
     // Imported (metres, maybe Z-up) and written back in the source unit: the same text as the
     // file-unit clip, so scaling is undone and file_to_world is not written.
-    kg::io::BvhImport in = kg::io::import_bvh(*path, {});
+    kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
     CHECK(write_bvh_string(in.motion) == write_bvh_string(clip.motion));
   }
   if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
@@ -143,7 +144,7 @@ TEST_CASE("bvh writer: other units scale lengths only") {
     WARN("skipped: cmu/bvh_motionbuilder/16_15.bvh not found");
     return;
   }
-  kg::io::BvhImport in = kg::io::import_bvh(*path, {});
+  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
   REQUIRE(in.motion.skeleton->source_unit_metres == 0.01);
   const std::string m = write_bvh_string(in.motion, {.units = "m", .precision = 8});
   CHECK(m.find("ROOT root\n{\n\tOFFSET 0.06939 0.97422 -1.51953\n") != std::string::npos);

@@ -2,6 +2,7 @@
 
 #include <map>
 
+#include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/motion/resample.hpp"
@@ -9,33 +10,10 @@
 
 using namespace kg;
 using kg::motion::test::channels_of;
+using kg::test::NodeContext;
 using K = motion::ChannelKind;
 
 namespace {
-
-// The least a node needs to run: inputs in, outputs and figures out.
-class TestContext final : public graph::RunContext {
- public:
-  explicit TestContext(graph::Params params) : params_(std::move(params)) {}
-  const std::string& node_id() const override { return id_; }
-  const graph::Params& params() const override { return params_; }
-  const graph::Value& input_value(const std::string& port) const override {
-    auto it = inputs.find(port);
-    return it == inputs.end() ? empty_ : it->second;
-  }
-  void set_output(const std::string& port, graph::Value value) override { outputs[port] = std::move(value); }
-  void report(const std::string& key, graph::Figure value) override { figures[key] = std::move(value); }
-  void log(const std::string& message) override { logs.push_back(message); }
-
-  std::map<std::string, graph::Value> inputs, outputs;
-  std::map<std::string, graph::Figure> figures;
-  std::vector<std::string> logs;
-
- private:
-  std::string id_ = "resample";
-  graph::Params params_;
-  graph::Value empty_;
-};
 
 motion::Motion clip(int frames, double fps) {
   auto s = std::make_shared<motion::Skeleton>();
@@ -50,19 +28,19 @@ motion::Motion clip(int frames, double fps) {
   return m;
 }
 
-const graph::NodeType& resample_type(const std::vector<graph::NodeType>& types) {
-  for (const graph::NodeType& t : types)
-    if (t.spec.type == "motion.resample") return t;
-  FAIL("motion.resample is not among motion_node_types()");
-  throw;  // unreachable
+// motion.resample, registered as the CLI's module registers it.
+const graph::NodeType& resample_type() {
+  static const graph::Registry registry = kg::test::registry_of(motion_node_types());
+  return kg::test::node_type(registry, "motion.resample");
 }
 
 }  // namespace
 
 TEST_CASE("motion.resample declares its signature", "[nodes]") {
-  const auto types = motion_node_types();
-  const graph::NodeType& t = resample_type(types);
-  const graph::NodeSpec& spec = t.spec;
+  // Registers through the same registry API as plugins.
+  const graph::Registry registry = kg::test::registry_of(motion_node_types());
+  REQUIRE(registry.find_node("motion.resample") != nullptr);
+  const graph::NodeSpec& spec = registry.find_node("motion.resample")->spec;
   CHECK(spec.version == 1);
   CHECK_FALSE(spec.doc.empty());
   REQUIRE(spec.inputs.size() == 1);
@@ -78,17 +56,13 @@ TEST_CASE("motion.resample declares its signature", "[nodes]") {
   CHECK(fps->required);
   REQUIRE(fps->min.has_value());
   CHECK(*fps->min == 0);  // 0 keeps the clip as it is
-  // Registers through the same registry API as plugins.
-  graph::Registry registry;
-  for (const graph::NodeType& nt : types) registry.add_node(nt);
-  CHECK(registry.find_node("motion.resample") != nullptr);
 }
 
 TEST_CASE("motion.resample runs through a RunContext and reports its figures", "[nodes]") {
-  const graph::NodeType& t = resample_type(motion_node_types());
+  const graph::NodeType& t = resample_type();
   const graph::Params params({{"fps", 30.0}});
   const auto node = t.create(params);
-  TestContext ctx(params);
+  NodeContext ctx(params);
   const motion::Motion in = clip(241, 120.0);
   ctx.inputs["motion"] = graph::Value::make(in);
   node->run(ctx);
@@ -104,35 +78,32 @@ TEST_CASE("motion.resample runs through a RunContext and reports its figures", "
   CHECK(std::get<double>(ctx.figures.at("duration_s")) == Approx(2.0));
 
   // The node keeps no per-run state: a second run on other data is independent.
-  TestContext again(params);
+  NodeContext again(params);
   again.inputs["motion"] = graph::Value::make(clip(31, 30.0));
   node->run(again);
   CHECK(again.outputs["motion"].get<motion::Motion>().frame_count() == 31);
 }
 
 TEST_CASE("motion.resample with fps 0 passes the clip through unchanged", "[nodes]") {
-  const graph::NodeType& t = resample_type(motion_node_types());
+  const graph::NodeType& t = resample_type();
   const graph::Params params({{"fps", 0.0}});
-  const auto node = t.create(params);
-  TestContext ctx(params);
   const motion::Motion in = clip(17, 120.0);
-  ctx.inputs["motion"] = graph::Value::make(in);
-  node->run(ctx);
-  const auto& out = ctx.outputs["motion"].get<motion::Motion>();
+  const NodeContext ctx = kg::test::run_node(t, params, {{"motion", graph::Value::make(in)}});
+  const auto& out = ctx.outputs.at("motion").get<motion::Motion>();
   CHECK(out.fps == 120.0);
   CHECK(out.values == in.values);
 }
 
 TEST_CASE("motion.resample fails clearly on bad params and inputs", "[nodes]") {
-  const graph::NodeType& t = resample_type(motion_node_types());
+  const graph::NodeType& t = resample_type();
   CHECK_THROWS_WITH(t.create(graph::Params({{"fps", -0.5}})), Catch::Contains("expected a frame rate > 0"));
   CHECK_THROWS_WITH(t.create(graph::Params({{"fps", -5.0}})), Catch::Contains("fps -5"));
   const graph::Params params({{"fps", 30.0}});
   const auto node = t.create(params);
-  TestContext wrong_type(params);
+  NodeContext wrong_type(params);
   wrong_type.inputs["motion"] = graph::Value::make(1.5);
   CHECK_THROWS_WITH(node->run(wrong_type), Catch::Contains("kg.Motion"));
-  TestContext bad_clip(params);
+  NodeContext bad_clip(params);
   motion::Motion nan_clip = clip(10, 120.0);
   nan_clip.values(3, 4) = std::nan("");
   bad_clip.inputs["motion"] = graph::Value::make(nan_clip);

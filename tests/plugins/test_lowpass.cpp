@@ -28,11 +28,9 @@ struct Lowpass {
 
   Motion run(const Motion& in, const std::map<std::string, ParamValue>& overrides = {},
              std::map<std::string, Figure>* figures = nullptr) const {
-    const Params params = params_for(registry, "filter.lowpass", overrides);
-    NodePtr node = registry.create_node("filter.lowpass", params);
-    TestContext ctx(params);
-    ctx.inputs["motion"] = Value::make(in);
-    node->run(ctx);
+    const NodeContext ctx =
+        kg::test::run_node(registry, "filter.lowpass", params_for(registry, "filter.lowpass", overrides),
+                           {{"motion", Value::make(in)}});
     if (figures) *figures = ctx.figures;
     return ctx.outputs.at("motion").get<Motion>();
   }

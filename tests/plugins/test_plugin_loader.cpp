@@ -39,11 +39,8 @@ Snapshot snapshot(const Registry& r, const PluginLoader& l) {
 // After a refusal: loading a good plugin and running one of its nodes still works.
 void check_usable(Registry& registry, PluginLoader& loader) {
   if (registry.find_node("test.add") == nullptr) loader.load_file(test_nodes_library());
-  NodePtr add = registry.create_node("test.add", Params{});
-  TestContext ctx{Params{}};
-  ctx.inputs["a"] = Value::make(2.0);
-  ctx.inputs["b"] = Value::make(3.5);
-  add->run(ctx);
+  const NodeContext ctx =
+      kg::test::run_node(registry, "test.add", Params{}, {{"a", Value::make(2.0)}, {"b", Value::make(3.5)}});
   CHECK(ctx.outputs.at("sum").get<double>() == 5.5);
 }
 
@@ -278,7 +275,7 @@ TEST_CASE("a plugin's library stays loaded while a node made from it lives", "[p
   REQUIRE(is_loaded());
   Value out;
   {
-    TestContext ctx{Params{}};
+    NodeContext ctx;
     node->run(ctx);
     out = ctx.outputs.at("value");
   }

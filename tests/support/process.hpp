@@ -1,4 +1,7 @@
-// Test support: temporary directories and running a program with its output captured.
+// Test support: running a program with its output captured.
+//
+//   const Result r = run_program(kinegraph, {"run", graph.string()}, {"KINEGRAPH_PLUGIN_PATH=..."});
+//   INFO(show(r));  // exit code, stdout and stderr in a failure message
 #pragma once
 
 #include <fcntl.h>
@@ -9,51 +12,16 @@
 #include <atomic>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <sstream>
 #include <string>
 #include <vector>
+
+#include "temp_dir.hpp"
 
 extern char** environ;
 
 namespace kg::test {
 
 namespace fs = std::filesystem;
-
-// A fresh directory under the system temp folder, removed with everything in it on destruction.
-class TempDir {
- public:
-  TempDir() {
-    static std::atomic<int> counter{0};
-    path_ = fs::temp_directory_path() /
-            ("kg_test_" + std::to_string(::getpid()) + "_" + std::to_string(counter++));
-    fs::remove_all(path_);
-    fs::create_directories(path_);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(path_, ec);
-  }
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  fs::path operator/(const std::string& name) const { return path_ / name; }
-  const fs::path& path() const { return path_; }
-  fs::path write(const std::string& name, const std::string& text) const {
-    fs::create_directories((path_ / name).parent_path());
-    std::ofstream(path_ / name, std::ios::binary) << text;
-    return path_ / name;
-  }
-
- private:
-  fs::path path_;
-};
-
-inline std::string read_file(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream os;
-  os << in.rdbuf();
-  return os.str();
-}
 
 struct Result {
   int code = -1;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <map>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kg/graph/error.hpp"
@@ -53,6 +54,9 @@ struct Graph {
   std::vector<Connection> connections;
 
   const NodeInstance* find_node(const std::string& id) const;
+  // For each connection in order, the indices in `nodes` of its from and to nodes. Throws Error
+  // at the connection's place when it names a node not in the graph.
+  std::vector<std::pair<std::size_t, std::size_t>> connection_ends() const;
   // Node indices in a topological order (stable: file order among ready nodes).
   std::vector<std::size_t> topological_order() const;
 };

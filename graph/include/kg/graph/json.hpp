@@ -1,13 +1,15 @@
 // A small streaming JSON writer (no DOM): reports, manifests and exported figures.
 //
 //   JsonWriter w(os);
-//   w.begin_object(); w.key("ok"); w.value(true); w.key("n"); w.value(3); w.end_object();
+//   w.begin_object(); w.key("ok"); w.value(true); w.field("n", 3); w.end_object();
 #pragma once
 
 #include <cstdint>
+#include <optional>
 #include <ostream>
 #include <string>
 #include <string_view>
+#include <variant>
 #include <vector>
 
 namespace kg::graph {
@@ -30,7 +32,29 @@ class JsonWriter {
   void value(int number) { value(static_cast<std::int64_t>(number)); }
   void value(std::size_t number) { value(static_cast<std::int64_t>(number)); }
   void value(bool flag);
+  void value(const std::vector<double>& numbers);  // an array of numbers
+  // The alternative a variant holds (a ParamValue, a Figure), written as itself.
+  template <class... Ts>
+  void value(const std::variant<Ts...>& v) {
+    std::visit([this](const auto& x) { value(x); }, v);
+  }
+  // null when empty.
+  template <class T>
+  void value(const std::optional<T>& v) {
+    if (v) {
+      value(*v);
+    } else {
+      null();
+    }
+  }
   void null();
+
+  // key(name), then value(v).
+  template <class T>
+  void field(std::string_view name, const T& v) {
+    key(name);
+    value(v);
+  }
 
  private:
   void before_value();

@@ -45,6 +45,12 @@ class RunContext {
   // A line for the user (stderr, prefixed with the node id).
   virtual void log(const std::string& message) = 0;
 
+  // A registry extension (registry.hpp) by interface and name, e.g. a constraint kind a solver
+  // node meets in its input data; null when absent. Contexts without a registry return null.
+  virtual std::shared_ptr<const void> find_extension(const std::string& interface, const std::string& name) const {
+    return nullptr;
+  }
+
   bool has_input(const std::string& port) const { return !input_value(port).empty(); }
 
   template <Named T>

@@ -37,9 +37,9 @@ struct NodeSpec {
   std::string type;  // "stage.name", e.g. "io.import_bvh"
   int version = 1;
   std::string doc;
-  std::vector<PortSpec> inputs;
-  std::vector<PortSpec> outputs;
-  std::vector<ParamSpec> params;
+  std::vector<PortSpec> inputs{};  // {} lets designated initializers leave them out
+  std::vector<PortSpec> outputs{};
+  std::vector<ParamSpec> params{};
 
   const PortSpec* find_input(const std::string& name) const;
   const PortSpec* find_output(const std::string& name) const;

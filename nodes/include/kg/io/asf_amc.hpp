@@ -92,13 +92,8 @@ inline constexpr double kAmcDefaultFps = 120.0;
 motion::Motion parse_amc(std::string_view text, const std::string& path, const AsfSkeleton& asf);
 motion::Motion read_amc(const std::string& path, const AsfSkeleton& asf);
 
-// A clip brought to skeleton.hpp's conventions (metres, radians, +Y up) and what was done.
-struct ImportedMotion {
-  motion::Motion motion;
-  std::vector<std::string> notes;  // one line each, for the user (units chosen, fps assumed...)
-};
-
-// read_asf + read_amc + apply_import_options. options.units "auto" takes the ASF's :units;
+// read_asf + read_amc + apply_import_options (ImportedMotion: import_options.hpp; AMC files
+// state no frame time, so file_frame_time is 0). options.units "auto" takes the ASF's :units;
 // options.fps 0 means kAmcDefaultFps, said in the notes.
 ImportedMotion import_asf_amc(const std::string& asf_path, const std::string& amc_path,
                               const ImportOptions& options);

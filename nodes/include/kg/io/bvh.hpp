@@ -6,7 +6,7 @@
 // apply_import_options (import_options.hpp) to bring the clip to metres and +Y up, or use
 // import_bvh, which does both.
 //
-//   BvhImport in = import_bvh("walk.bvh", ImportOptions{.units = "auto"});   // metres, radians
+//   ImportedMotion in = import_bvh("walk.bvh", {.units = "auto"});           // metres, radians
 //   for (const std::string& note : in.notes) std::cerr << note << '\n';      // what auto chose
 //   write_bvh(os, in.motion, BvhWriteOptions{.units = "cm", .precision = 6});
 //
@@ -49,13 +49,8 @@ BvhClip parse_bvh(std::string_view text, const std::string& file_name);
 // naming it.
 BvhClip read_bvh(const std::filesystem::path& path);
 
-// read_bvh followed by apply_import_options.
-struct BvhImport {
-  motion::Motion motion;           // metres, radians, +Y up (skeleton.hpp's conventions)
-  double file_frame_time = 0;      // seconds, the header's value (motion.fps may override it)
-  std::vector<std::string> notes;  // what `auto` chose and other remarks, one line each
-};
-BvhImport import_bvh(const std::filesystem::path& path, const ImportOptions& options);
+// read_bvh followed by apply_import_options; file_frame_time is the header's "Frame Time:".
+ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions& options);
 
 struct BvhWriteOptions {
   // Unit of the written lengths: source (the skeleton's source_unit_metres) | m | cm | mm |

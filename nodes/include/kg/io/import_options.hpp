@@ -5,6 +5,7 @@
 //   ImportOptions opt{.units = "auto", .up = "auto", .fps = 0};
 //   std::vector<std::string> notes = apply_import_options(motion, opt, file_fps, "walk.bvh");
 //   // notes: {"walk.bvh: units auto: standing height 172.3 file units, taken as cm (1.72 m)"}
+//   ImportedMotion in = import_bvh("walk.bvh", opt);  // bvh.hpp; import_asf_amc the same
 #pragma once
 
 #include <string>
@@ -25,6 +26,16 @@ struct ImportOptions {
   std::string up = "auto";
   // Frames per second overriding the file's header; 0 keeps the file's.
   double fps = 0;
+};
+
+// What every importer returns (import_bvh, import_asf_amc, import_motion): a clip brought to
+// skeleton.hpp's conventions and what was done to get there.
+struct ImportedMotion {
+  motion::Motion motion;           // metres, radians, +Y up (skeleton.hpp's conventions)
+  std::vector<std::string> notes;  // one line each, for the user: what `auto` chose, fps assumed...
+  // Seconds per frame as the file's header states it (BVH's "Frame Time:"); motion.fps may
+  // override it. 0 when the file states none (AMC).
+  double file_frame_time = 0;
 };
 
 // Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.

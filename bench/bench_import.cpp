@@ -1,19 +1,24 @@
-// BVH import speed: parse + units/axes + forward kinematics of every joint in every frame, one
-// thread, best of several runs, against Blender 3.4's BVH importer on the same files timed in the
-// same run (a `blender -b` subprocess timing only bpy.ops.import_anim.bvh with perf_counter).
+// Import speed, one thread, best of several runs.
+// BVH: parse + units/axes + forward kinematics of every joint in every frame, against Blender
+// 3.4's BVH importer on the same files timed in the same run (a `blender -b` subprocess timing
+// only bpy.ops.import_anim.bvh with perf_counter).
+// ASF/AMC: parsing an AMC already in memory against its ASF, and that parse plus forward
+// kinematics of every joint in every frame, for two CMU takes of ../shared/data.
 //
-//   bench_bvh_import [file.bvh ...]     (default: three clips of ../shared/data)
+//   bench_import [file.bvh ...]     (default BVH files: three clips of ../shared/data)
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
 #include <limits>
 #include <map>
 #include <string>
 #include <vector>
 
+#include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 
@@ -85,23 +90,8 @@ std::map<std::string, double> blender_seconds(const std::vector<fs::path>& files
   return out;
 }
 
-}  // namespace
-
-int main(int argc, char** argv) {
-  std::vector<fs::path> files;
-  for (int i = 1; i < argc; ++i) files.emplace_back(argv[i]);
-  if (files.empty()) {
-    const fs::path data = KG_DATA_DIR;
-    for (const char* rel : {"cmu/bvh_daz_two_person/60_10_scaled.bvh", "cmu/bvh_iclone_cc_rig/002_06.bvh",
-                            "cmu/bvh_daz/07_05.bvh"})
-      if (fs::exists(data / rel)) files.push_back(fs::weakly_canonical(data / rel));
-    if (files.empty()) {
-      std::cout << "skipped: no BVH file of ../shared/data found under " << data
-                << "; pass files as arguments\n";
-      return 0;
-    }
-  }
-  const int runs = 15;
+// The BVH table: read, import, FK and the whole path per file, and Blender's importer beside it.
+void bench_bvh(const std::vector<fs::path>& files, int runs) {
   std::printf("BVH import, one thread, best of %d runs (Blender: best of 3)\n", runs);
   std::printf("%-22s %6s %6s %7s | %9s %9s %9s %10s | %9s %8s\n", "file", "frames", "joints", "MB", "read ms",
               "import ms", "FK ms", "FK Mjnt/s", "Blender s", "ratio");
@@ -115,7 +105,7 @@ int main(int argc, char** argv) {
   double sink = 0;
   for (const fs::path& path : files) {
     Row r{path, 0, 0, 0, 0, 0, 0};
-    kg::io::BvhImport in = kg::io::import_bvh(path, {});
+    kg::io::ImportedMotion in = kg::io::import_bvh(path, {});
     r.frames = in.motion.frame_count();
     r.joints = in.motion.skeleton->joint_count();
     std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(r.joints));
@@ -124,7 +114,7 @@ int main(int argc, char** argv) {
     r.fk = best_seconds(runs, [&] { sink += all_fk(in.motion, world); });
     // What the ratio uses: the whole path from file to every joint's world transform.
     r.total = best_seconds(runs, [&] {
-      kg::io::BvhImport x = kg::io::import_bvh(path, {});
+      kg::io::ImportedMotion x = kg::io::import_bvh(path, {});
       sink += all_fk(x.motion, world);
     });
     rows.push_back(r);
@@ -145,5 +135,55 @@ int main(int argc, char** argv) {
   if (blender.empty())
     std::printf("Blender: skipped (blender not installed or its import failed; apt-get install blender)\n");
   std::printf("(checksum %g)\n", sink);
+}
+
+// The AMC takes timed, with their skeletons (under KG_DATA_DIR/cmu/asf_amc).
+void bench_asf_amc(int runs) {
+  const fs::path dir = fs::path(KG_DATA_DIR) / "cmu" / "asf_amc";
+  std::printf("\nASF/AMC import, one thread, best of %d runs (the AMC text already in memory)\n", runs);
+  std::printf("%-22s %6s %6s %7s | %9s %9s %12s\n", "file", "frames", "joints", "MB", "parse ms", "MB/s",
+              "parse+FK ms");
+  double sink = 0;
+  for (const auto& [asf_name, amc_name] :
+       {std::pair{"16.asf", "16_15.amc"}, std::pair{"09.asf", "09_06.amc"}}) {
+    const fs::path asf_path = dir / asf_name, amc_path = dir / amc_name;
+    if (!fs::exists(asf_path) || !fs::exists(amc_path)) {
+      std::printf("%-22s skipped: %s or %s not found under %s\n", amc_name, asf_name, amc_name, dir.c_str());
+      continue;
+    }
+    const kg::io::AsfSkeleton asf = kg::io::read_asf(asf_path.string());
+    std::ifstream in(amc_path, std::ios::binary);
+    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const kg::motion::Motion m = kg::io::parse_amc(text, amc_name, asf);
+    std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(m.skeleton->joint_count()));
+    const double parse =
+        best_seconds(runs, [&] { sink += kg::io::parse_amc(text, amc_name, asf).values(0, 0); });
+    const double parse_fk =
+        best_seconds(runs, [&] { sink += all_fk(kg::io::parse_amc(text, amc_name, asf), world); });
+    const double mb = static_cast<double>(text.size()) / 1e6;
+    std::printf("%-22s %6d %6d %7.2f | %9.3f %9.1f %12.3f\n", amc_name, m.frame_count(),
+                m.skeleton->joint_count(), mb, parse * 1e3, mb / parse, parse_fk * 1e3);
+  }
+  std::printf("(checksum %g)\n", sink);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<fs::path> files;
+  for (int i = 1; i < argc; ++i) files.emplace_back(argv[i]);
+  if (files.empty()) {
+    const fs::path data = KG_DATA_DIR;
+    for (const char* rel : {"cmu/bvh_daz_two_person/60_10_scaled.bvh", "cmu/bvh_iclone_cc_rig/002_06.bvh",
+                            "cmu/bvh_daz/07_05.bvh"})
+      if (fs::exists(data / rel)) files.push_back(fs::weakly_canonical(data / rel));
+    if (files.empty()) {
+      std::cout << "skipped: no BVH file of ../shared/data found under " << data
+                << "; pass files as arguments\n";
+    }
+  }
+  const int runs = 15;
+  if (!files.empty()) bench_bvh(files, runs);
+  bench_asf_amc(runs);
   return 0;
 }
