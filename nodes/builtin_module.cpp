@@ -6,7 +6,7 @@
 namespace {
 
 kg::graph::PluginRecord builtin_record() {
-  return kg::graph::PluginRecord{"kg.builtin", "0.1.0", kg::builtin_node_types()};
+  return kg::graph::PluginRecord{"kg.builtin", "0.1.0", kg::builtin_node_types(), kg::builtin_extensions()};
 }
 
 }  // namespace

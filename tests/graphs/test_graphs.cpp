@@ -60,7 +60,7 @@ TEST_CASE("every graph in graphs/ validates", "[graphs]") {
   for (const auto& entry : fs::directory_iterator(kSource / "graphs")) {
     if (entry.path().extension() != ".yaml") continue;
     std::vector<std::string> args{"validate", entry.path().string()};
-    if (entry.path().filename() == "convert.yaml")
+    if (entry.path().filename() != "demo.yaml")  // the others read a clip given as `input`
       args.insert(args.end(), {"--set", "input=" + (kSource / "tests/graphs/data/two_joints.bvh").string()});
     const Result r = kinegraph(args);
     INFO(entry.path() << "\n" << show(r));

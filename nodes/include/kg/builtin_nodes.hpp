@@ -12,11 +12,20 @@ std::vector<graph::NodeType> motion_node_types();  // motion.resample, ... (node
 std::vector<graph::NodeType> bvh_node_types();     // io.import_bvh, io.export_bvh (nodes/io)
 std::vector<graph::NodeType> asf_amc_node_types(); // io.import_asf_amc, io.import_motion (nodes/io)
 std::vector<graph::NodeType> synth_node_types();   // motion.synthesize (nodes/synth)
+// nodes/retarget: retarget.target, retarget.constraints_on_target, retarget.initial_estimate,
+// retarget.key_spacing
+std::vector<graph::NodeType> retarget_target_node_types();
+// retarget.footplants, retarget.constraints, retarget.merge_constraints
+std::vector<graph::NodeType> retarget_constraint_node_types();
+std::vector<graph::NodeType> retarget_spacetime_node_types();  // retarget.spacetime
+std::vector<graph::NodeType> retarget_metrics_node_types();    // retarget.per_frame_ik, retarget.metrics
 
-// Every built-in node type (the four lists above, in that order).
+// Every built-in node type (the lists above, in that order).
 std::vector<graph::NodeType> builtin_node_types();
-// Registers builtin_node_types() through the same Registry API as plugins (tests use this; the
-// CLI loads them as the kg_builtin_nodes module instead).
+// Every built-in extension: the constraint kinds of the spacetime solver (kg.ConstraintKind).
+std::vector<graph::Extension> builtin_extensions();
+// Registers builtin_node_types() and builtin_extensions() through the same Registry API as
+// plugins (tests use this; the CLI loads them as the kg_builtin_nodes module instead).
 void register_builtin_nodes(graph::Registry& registry);
 
 }  // namespace kg

@@ -1,0 +1,180 @@
+// The spacetime solver of Gleicher 1998 §6: finds the displacement maps d (bspline.hpp) that,
+// added to the initial estimates m1 of one or two characters, make the constraints hold again
+// while changing the motion as little as possible. It minimises the damped least-squares
+// objective (eq. 4)
+//     F(x) = 1/2 sum_rows (w_r rho_r(x))^2 + 1/2 eps x^T M x
+// over the B-spline controls x of every free channel, where rho_r = r for an equality row and
+// min(r, 0) for an inequality row (the active set: a violated inequality row acts as an equality,
+// a satisfied one drops out; re-evaluated at every iterate), w_r the constraint's weight, and M
+// diagonal: a root translation channel weighs 1, a rotation channel the square of the reach of its
+// joint (the largest rest-pose distance from the joint to a point it moves, at least 2 cm), so
+// the damping measures how far a control moves the figure's points in metres, whatever the
+// channel's unit.
+//
+// Each Gauss-Newton step solves (J^T J + eps M) dx = -(J^T rho + eps M x) (eq. 5 with M for I).
+// J is analytic: d row / d control = (d row / d world points, from the kind) * point_jacobian
+// (kinematics.hpp) * B-spline basis weight. The normal matrix is assembled from per-frame blocks
+// (a frame's rows touch only the channels of its points' ancestor chains, and 4 consecutive
+// controls per channel) into a banded matrix over the controls, ordered control-major (every
+// channel of one control time together; only channels some active row touches enter, the others
+// have the diagonal system (eps + lambda) M dx = -eps M x), and factored by a dense banded Cholesky of our
+// own (measured 6-7x faster than Eigen's SimplicialLLT on the same matrices, before the latter's
+// ordering: bench_retarget). A row reading two frames far apart (same_place over a long plant)
+// widens the band to span them: still exact, only slower. Steps carry a Levenberg-Marquardt term
+// lambda M (matrix only, adapted per iteration) and a backtracking (Armijo) line search on F.
+// Inequality rows that are satisfied at x but that the full step would cross by more than the
+// tolerance join a working set before the step is solved again (they then resist moving along
+// their Jacobian without pulling: their residual counts as 0 while satisfied), and leave it once
+// the iterate is well inside them; this keeps joint limits from cutting every step short.
+// When a pass ends with constraints still violated past tolerance and `densify` is set, the
+// solve restarts from m1 + d with every key spacing halved (down to 1 frame), §4 step 5.
+//
+//   SpacetimeProblem problem;
+//   problem.characters.push_back({.initial = m1, .frames_per_key = spacing.frames_per_key});
+//   problem.constraints = &set;                                   // not owned, outlives the solve
+//   problem.kinds = [&](const std::string& n) { return table.find(n); };
+//   SpacetimeResult result = solve_spacetime(problem);
+//   if (!result.converged()) std::cerr << result.message << '\n';
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/graph/node.hpp"
+#include "kg/motion/motion.hpp"
+#include "kg/retarget/bspline.hpp"
+#include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/constraints.hpp"
+
+namespace kg::retarget {
+
+// One character of the problem.
+struct CharacterProblem {
+  // The initial estimate m1 on the target skeleton (metres, radians). All characters of one
+  // problem have the same frame count and rate.
+  motion::Motion initial;
+  // Morphing (§5): the skeleton of each frame (frame_count() entries, same structure as
+  // initial.skeleton). Empty: initial.skeleton for every frame.
+  std::vector<std::shared_ptr<const motion::Skeleton>> skeleton_per_frame{};
+  // Frames between controls, per channel (channel_count() entries, each >= 1). Empty: 4 for all.
+  std::vector<int> frames_per_key{};
+  // Channels the solve must not change (channel_count() entries). Empty: every channel free.
+  std::vector<bool> frozen{};
+};
+
+
+struct SpacetimeOptions {
+  double epsilon = 1e-4;               // damping weight of x^T M x (dimensionless, see above)
+  // Converged when every row is within these. 1 mm is the acceptance figure (the paper
+  // met a quarter inch); a tighter tolerance that the key spacing cannot reach makes the solve
+  // densify keys (step 5), which buys accuracy with high frequencies.
+  double equality_tolerance = 1e-3;    // |r| of every equality row, metres or radians
+  double inequality_tolerance = 1e-3;  // max(0, -r) of every inequality row
+  int max_iterations = 40;             // Gauss-Newton iterations per pass
+  bool densify = true;                 // §4 step 5: retry with halved key spacing when violated
+  // Called with one line per iteration (objective, worst violation, step length, active rows)
+  // when set; for diagnostics.
+  std::function<void(const std::string&)> trace{};
+};
+
+struct SpacetimeProblem {
+  std::vector<CharacterProblem> characters;  // one or two (PointRef::character indexes them)
+  const ConstraintSet* constraints = nullptr;  // not owned
+  KindFinder kinds;
+  SpacetimeOptions options{};
+};
+
+enum class SpacetimeStatus { Converged, NotConverged };
+const char* to_string(SpacetimeStatus status);  // "converged", "not converged"
+
+// Final state of one constraint kind's rows.
+struct KindReport {
+  std::string kind;
+  int rows = 0;                      // equality + inequality rows over all samples
+  int active_rows = 0;               // equality rows + violated inequality rows at the end
+  double worst_equality = 0;         // max |r| of the equality rows (metres or radians)
+  double worst_inequality = 0;       // max(0, -r) of the inequality rows
+  double worst() const { return worst_equality > worst_inequality ? worst_equality : worst_inequality; }
+};
+
+// A constraint still violated past tolerance at the end.
+struct ViolatedConstraint {
+  std::string kind, label;
+  double worst = 0;          // metres or radians
+  int first_frame = 0;       // span of its violated samples (their first frames)
+  int last_frame = 0;
+  bool in_metres = true;     // false when it reads only channel values
+};
+
+// The outcome, as data (DESIGN.md tier 3): a solve that cannot meet its constraints is reported
+// here, not thrown.
+struct SpacetimeResult {
+  std::vector<motion::Motion> motions;  // m1 + d per character, on the initial motions' skeletons
+  SpacetimeStatus status = SpacetimeStatus::NotConverged;
+  std::string message;                  // "converged in 5 iterations ..." or "did not converge: ..."
+  int iterations = 0;                   // Gauss-Newton iterations over all passes
+  int passes = 0;                       // 1 + densified retries
+  double seconds = 0;                   // wall time of the whole solve
+  std::vector<KindReport> kinds;        // sorted by kind name
+  std::vector<ViolatedConstraint> violated;  // worst first
+  int unknowns = 0;                     // free controls of the last pass
+  int active_rows = 0;                  // at the end
+  int total_rows = 0;
+  int bandwidth = 0;                    // of the last factored normal matrix
+  std::vector<std::vector<int>> frames_per_key;  // per character, of the last pass
+  double worst_violation() const;
+  bool converged() const { return status == SpacetimeStatus::Converged; }
+};
+
+// Dense banded Cholesky of a symmetric positive definite n x n matrix of half-bandwidth b, the
+// solver's linear algebra (public for the benchmark that compares it with sparse Cholesky).
+// Lower band stored by rows: row i holds A(i, i - b .. i), the diagonal last, so the inner
+// products run over contiguous memory. Cost n b^2 / 2 multiply-adds, storage n (b + 1).
+class BandedCholesky {
+ public:
+  // An n x n zero matrix of half-bandwidth b (0 <= b < n, or n == 0).
+  void reset(int n, int b);
+  int size() const { return n_; }
+  int bandwidth() const { return b_; }
+  // Entry (i, j) of the lower band: i >= j, i - j <= bandwidth().
+  double& at(int i, int j) { return data_[static_cast<std::size_t>(i) * (b_ + 1) + (j - i + b_)]; }
+  // In place A = L L^T; false when A is not positive definite.
+  bool factor();
+  // After factor(): solves A y = rhs, y holding rhs on entry.
+  void solve(Eigen::VectorXd& y) const;
+
+ private:
+  int n_ = 0, b_ = 0;
+  std::vector<double> data_;
+};
+
+// Solves. Throws std::invalid_argument (naming the constraint's label where there is one) for a
+// malformed problem: no characters, more characters than given, mismatched frame counts or
+// channel layouts, an unknown kind, a constraint its kind refuses, a frame, joint or channel out
+// of range. Everything else (not converged) is in the result.
+SpacetimeResult solve_spacetime(const SpacetimeProblem& problem);
+
+// Diagonal of M for one skeleton (channel_count() entries, see the header comment), m^2 per
+// unit of the channel squared.
+Eigen::VectorXd channel_sensitivity(const motion::Skeleton& skeleton);
+
+// The layouts of the problem's characters (frames_per_key or 4), and the full unknown vector
+// x = [x of character 0, x of character 1] their controls make (frozen channels included).
+std::vector<DisplacementLayout> spacetime_layouts(const SpacetimeProblem& problem);
+
+// Every row of the problem at x (weighted residuals w r, inequality rows unclipped) and the
+// dense Jacobian d(w r)/dx over the full unknown vector: for tests and diagnostics, through the
+// same analytic chain the solver assembles from.
+struct SpacetimeLinearization {
+  Eigen::VectorXd residual;
+  Eigen::MatrixXd jacobian;
+  std::vector<bool> inequality;
+};
+SpacetimeLinearization linearize_spacetime(const SpacetimeProblem& problem, const Eigen::VectorXd& x);
+
+}  // namespace kg::retarget
+

@@ -1,0 +1,232 @@
+// retarget.footplants, retarget.constraints, retarget.merge_constraints: thin adapters over
+// footplants.hpp and constraint_io.hpp (DESIGN.md 7).
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "kg/builtin_nodes.hpp"
+#include "kg/retarget/constraint_io.hpp"
+#include "kg/retarget/footplants.hpp"
+
+namespace kg {
+
+namespace {
+
+using graph::Node;
+using graph::NodeSpec;
+using graph::NodeType;
+using graph::Params;
+using graph::ParamSpec;
+using graph::ParamType;
+using graph::RunContext;
+
+ParamSpec param(const char* name, ParamType type, graph::ParamValue value, const char* doc,
+                std::optional<double> min = {}, std::optional<double> max = {}) {
+  ParamSpec p;
+  p.name = name;
+  p.type = type;
+  p.default_value = std::move(value);
+  p.doc = doc;
+  p.min = min;
+  p.max = max;
+  return p;
+}
+
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto a = item.find_first_not_of(" \t");
+    const auto b = item.find_last_not_of(" \t");
+    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
+  }
+  return out;
+}
+
+double parse_floor(const std::string& text) {
+  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
+  return v;
+}
+
+std::string count_summary(const std::map<std::string, int>& kinds) {
+  std::string out;
+  for (const auto& [k, n] : kinds) out += (out.empty() ? "" : ", ") + k + " " + std::to_string(n);
+  return out;
+}
+
+void report_set(RunContext& ctx, const retarget::ConstraintSet& set) {
+  std::map<std::string, int> kinds;
+  std::int64_t samples = 0;
+  for (const retarget::Constraint& c : set.constraints) {
+    ++kinds[c.kind];
+    samples += static_cast<std::int64_t>(c.samples.size());
+  }
+  ctx.report("constraints", static_cast<std::int64_t>(set.constraints.size()));
+  ctx.report("samples", samples);
+  ctx.report("kinds", count_summary(kinds));
+}
+
+const graph::PortSpec kConstraintsOut{"constraints", "kg.Constraints", true,
+                                      "the constraint set (points on segments at frames; metres, radians)"};
+
+// ---- retarget.footplants ---------------------------------------------------------------------
+class FootplantsNode final : public Node {
+ public:
+  explicit FootplantsNode(const Params& p) {
+    detect_.points = split_names(p.get<std::string>("points"));
+    detect_.height_threshold = p.get<double>("height_threshold");
+    detect_.speed_threshold = p.get<double>("speed_threshold");
+    detect_.hysteresis = p.get<double>("hysteresis");
+    detect_.min_duration_s = p.get<double>("min_duration_s");
+    detect_.trim_distance = p.get<double>("trim_distance");
+    detect_.rest_window_s = p.get<double>("rest_window_s");
+    detect_.floor = parse_floor(p.get<std::string>("floor"));
+    make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor : retarget::PlantFlavour::Fixed;
+    make_.above_floor = p.get<bool>("above_floor");
+  }
+
+  void run(RunContext& ctx) const override {
+    const motion::Motion& m = ctx.input<motion::Motion>("motion");
+    const retarget::FootplantDetection d = retarget::detect_footplants(m, detect_);
+    for (const std::string& note : d.notes) ctx.log(note);
+    for (std::size_t i = 0; i < d.points.size(); ++i)
+      ctx.report("plants." + d.points[i].name, static_cast<std::int64_t>(d.count(static_cast<int>(i))));
+    ctx.report("plants", static_cast<std::int64_t>(d.plants.size()));
+    ctx.report("floor_m", d.floor);
+    double skate = 0;
+    for (const retarget::Footplant& p : d.plants) skate = std::max(skate, p.skate);
+    ctx.report("source_skate_max_m", skate);
+    retarget::ConstraintSet set = retarget::footplant_constraints(d, m.frame_count(), make_);
+    report_set(ctx, set);
+    ctx.output("constraints", std::move(set));
+  }
+
+ private:
+  retarget::FootplantOptions detect_;
+  retarget::PlantConstraintOptions make_;
+};
+
+NodeType footplants_type() {
+  NodeSpec spec;
+  spec.type = "retarget.footplants";
+  spec.doc =
+      "Detects footplants (Gleicher 1998 §3.5): spans where a foot point is near the floor and nearly still "
+      "(height and horizontal-speed thresholds with hysteresis, a minimum duration), and emits them as "
+      "constraints: fixed (the plant's mean position, all axes) or floor (its height only, plus non-skid "
+      "same_place between consecutive frames: the solver may move the plant).";
+  spec.inputs = {{"motion", "kg.Motion", true, "the source clip the plants are read from"}};
+  spec.outputs = {kConstraintsOut};
+  ParamSpec flavour = param("flavour", ParamType::Enum, std::string("fixed"),
+                            "fixed: plant positions kept; floor: height plus non-skid only");
+  flavour.choices = {"fixed", "floor"};
+  spec.params = {
+      param("points", ParamType::String, std::string(),
+            "comma-separated points: 'Joint' (its origin), 'Joint/end' (its End Site) or 'Joint[x y z]' (metres "
+            "in the joint's frame, e.g. a heel); empty: per foot the ankle and the toe tip, found by common names"),
+      flavour,
+      param("height_threshold", ParamType::Float, 0.03, "m above the point's rest level to enter a plant", 1e-6, 10.0),
+      param("speed_threshold", ParamType::Float, 0.15, "m/s horizontal speed to enter a plant", 1e-6, 100.0),
+      param("hysteresis", ParamType::Float, 1.5, "leave thresholds = enter thresholds x this", 1.0, 10.0),
+      param("min_duration_s", ParamType::Float, 0.08, "shorter plants are dropped, seconds", 0.0, 10.0),
+      param("trim_distance", ParamType::Float, 0.01,
+            "m: a plant's end frames farther than this from its median position are trimmed (0: none)", 0.0, 1.0),
+      param("rest_window_s", ParamType::Float, 1.0,
+            "s: a point's rest level is its lowest height within this window around each frame (0: over the "
+            "whole clip)",
+            0.0, 100.0),
+      param("floor", ParamType::String, std::string("auto"),
+            "floor height in metres, or 'auto' (a low percentile of the lowest foot point's heights)"),
+      param("above_floor", ParamType::Bool, false, "also keep every foot point above the floor at every frame"),
+  };
+  return {spec, [](const Params& p) { return std::make_unique<FootplantsNode>(p); }};
+}
+
+// ---- retarget.constraints --------------------------------------------------------------------
+class ConstraintsNode final : public Node {
+ public:
+  explicit ConstraintsNode(const Params& p)
+      : path_(p.get<std::string>("path")), joint_limits_(p.get<bool>("joint_limits")) {}
+
+  void run(RunContext& ctx) const override {
+    const motion::Motion& m = ctx.input<motion::Motion>("motion");
+    retarget::ConstraintSet set;
+    if (ctx.has_input("constraints")) set = ctx.input<retarget::ConstraintSet>("constraints");
+    if (!path_.empty())
+      retarget::merge_constraints(set, retarget::read_constraints_file(path_, std::span(&m, 1)));
+    if (joint_limits_) {
+      const retarget::ConstraintSet limits = retarget::joint_limit_constraints(*m.skeleton, 0, m.frame_count());
+      ctx.report("joint_limits", static_cast<std::int64_t>(limits.constraints.size()));
+      if (limits.constraints.empty()) ctx.log("the skeleton has no channel limits");
+      retarget::merge_constraints(set, limits);
+    }
+    report_set(ctx, set);
+    ctx.output("constraints", std::move(set));
+  }
+
+ private:
+  std::string path_;
+  bool joint_limits_;
+};
+
+NodeType constraints_type() {
+  NodeSpec spec;
+  spec.type = "retarget.constraints";
+  spec.doc =
+      "Reads a constraint file (YAML, version 1: constraints naming joints, frame ranges or times, "
+      "joint limits by regular expression; see kg/retarget/constraint_io.hpp), adds the skeleton's own "
+      "channel limits (ASF limits) if asked, and merges them with the constraints on the input.";
+  spec.inputs = {{"motion", "kg.Motion", true, "the clip whose skeleton resolves joint names and bounds frames"},
+                 {"constraints", "kg.Constraints", false, "constraints to merge with (e.g. footplants)"}};
+  spec.outputs = {kConstraintsOut};
+  spec.params = {
+      param("path", ParamType::InputPath, std::string(), "the constraint YAML file; empty: none"),
+      param("joint_limits", ParamType::Bool, false,
+            "add a parameter_range constraint per limited channel of the skeleton, every frame"),
+  };
+  return {spec, [](const Params& p) { return std::make_unique<ConstraintsNode>(p); }};
+}
+
+// ---- retarget.merge_constraints --------------------------------------------------------------
+class MergeNode final : public Node {
+ public:
+  explicit MergeNode(const Params&) {}
+  void run(RunContext& ctx) const override {
+    retarget::ConstraintSet set = ctx.input<retarget::ConstraintSet>("a");
+    for (const char* port : {"b", "c", "d"})
+      if (ctx.has_input(port)) retarget::merge_constraints(set, ctx.input<retarget::ConstraintSet>(port));
+    report_set(ctx, set);
+    ctx.output("constraints", std::move(set));
+  }
+};
+
+NodeType merge_type() {
+  NodeSpec spec;
+  spec.type = "retarget.merge_constraints";
+  spec.doc = "Concatenates up to four constraint sets (a, then b, c, d when connected).";
+  spec.inputs = {{"a", "kg.Constraints", true, "first set"},
+                 {"b", "kg.Constraints", false, "second set"},
+                 {"c", "kg.Constraints", false, "third set"},
+                 {"d", "kg.Constraints", false, "fourth set"}};
+  spec.outputs = {kConstraintsOut};
+  return {spec, [](const Params& p) { return std::make_unique<MergeNode>(p); }};
+}
+
+}  // namespace
+
+std::vector<graph::NodeType> retarget_constraint_node_types() {
+  return {footplants_type(), constraints_type(), merge_type()};
+}
+
+}  // namespace kg

@@ -1,0 +1,431 @@
+// Metrics of a retargeted motion (metrics.hpp).
+#include "kg/retarget/metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+#include <map>
+#include <numbers>
+#include <set>
+#include <stdexcept>
+#include <tuple>
+
+#include "kg/graph/json.hpp"
+
+namespace kg::retarget {
+namespace {
+
+using motion::Motion;
+constexpr double kPi = std::numbers::pi;
+
+double wrap_angle(double a) {
+  return std::remainder(a, 2 * kPi);
+}
+
+void check_same_layout(const Motion& a, const Motion& b, const char* what) {
+  if (a.frame_count() != b.frame_count() || a.values.cols() != b.values.cols())
+    throw std::invalid_argument(std::string("metrics: the result (") + std::to_string(a.frame_count()) +
+                                " frames x " + std::to_string(a.values.cols()) + " channels) and the " +
+                                what + " (" + std::to_string(b.frame_count()) + " x " +
+                                std::to_string(b.values.cols()) + ") differ in shape");
+  for (int c = 0; c < a.values.cols(); ++c) {
+    const bool ra =
+        motion::is_rotation(a.skeleton->joint(a.skeleton->channel_owner(c).first)
+                                .channels[static_cast<std::size_t>(a.skeleton->channel_owner(c).second)]
+                                .kind);
+    const bool rb =
+        motion::is_rotation(b.skeleton->joint(b.skeleton->channel_owner(c).first)
+                                .channels[static_cast<std::size_t>(b.skeleton->channel_owner(c).second)]
+                                .kind);
+    if (ra != rb)
+      throw std::invalid_argument(std::string("metrics: channel ") + std::to_string(c) + " is a " +
+                                  (ra ? "rotation" : "position") + " in the result but not in the " + what);
+  }
+}
+
+bool channel_is_rotation(const motion::Skeleton& s, int c) {
+  const auto [joint, index] = s.channel_owner(c);
+  return motion::is_rotation(s.joint(joint).channels[static_cast<std::size_t>(index)].kind);
+}
+
+// Sum of squared third differences of `x` (times fps^3).
+double jerk_sum_squares(const Eigen::VectorXd& x, double fps) {
+  const double scale = fps * fps * fps;
+  double sum = 0;
+  for (Eigen::Index f = 0; f + 3 < x.size(); ++f) {
+    const double j = (x(f + 3) - 3 * x(f + 2) + 3 * x(f + 1) - x(f)) * scale;
+    sum += j * j;
+  }
+  return sum;
+}
+
+JerkFigures jerk_of(const Motion& shape, const std::function<Eigen::VectorXd(int)>& channel) {
+  JerkFigures out;
+  const int frames = shape.frame_count();
+  out.samples = std::max(0, frames - 3);
+  double sum_t = 0, sum_r = 0;
+  for (int c = 0; c < shape.values.cols(); ++c) {
+    const bool rotation = channel_is_rotation(*shape.skeleton, c);
+    const double s = jerk_sum_squares(channel(c), shape.fps);
+    if (rotation) {
+      ++out.rotation_channels;
+      sum_r += s;
+    } else {
+      ++out.translation_channels;
+      sum_t += s;
+    }
+  }
+  if (out.samples > 0) {
+    if (out.translation_channels > 0)
+      out.translation = std::sqrt(sum_t / (out.samples * out.translation_channels));
+    if (out.rotation_channels > 0) out.rotation = std::sqrt(sum_r / (out.samples * out.rotation_channels));
+  }
+  return out;
+}
+
+// The displacement of channel c: result - reference, rotations wrapped and unwrapped over time.
+Eigen::VectorXd displacement(const Motion& result, const Motion& reference, int c) {
+  Eigen::VectorXd d = result.values.col(c) - reference.values.col(c);
+  if (channel_is_rotation(*result.skeleton, c)) d = unwrap_angles(d, true);
+  return d;
+}
+
+}  // namespace
+
+// ---- foot skate ----
+std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
+  // Point identity -> (label, frames), in order of first appearance.
+  using Key = std::tuple<int, double, double, double>;
+  std::map<Key, std::size_t> index;
+  std::vector<std::pair<PlantSkate, std::set<int>>> points;
+  for (const Constraint& c : set.constraints) {
+    const bool position = c.kind == "position", same_place = c.kind == "same_place";
+    if (!position && !same_place) continue;
+    for (std::size_t i = 0; i < c.points.size(); ++i) {
+      const PointRef& p = c.points[i];
+      if (p.character != 0)
+        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
+                                    std::to_string(p.character) +
+                                    "; foot skate is measured on one character");
+      const Key key{p.joint, p.local.x(), p.local.y(), p.local.z()};
+      auto [it, added] = index.try_emplace(key, points.size());
+      if (added) {
+        PlantSkate plant;
+        plant.label = c.label;
+        plant.point = p;
+        points.push_back({plant, {}});
+      }
+      std::set<int>& frames = points[it->second].second;
+      for (const Sample& s : c.samples) {
+        if (position && !s.params.empty()) continue;  // a moving target, not a plant
+        if (i < s.frames.size()) frames.insert(s.frames[i]);
+      }
+    }
+  }
+  std::vector<PlantSkate> plants;
+  for (const auto& [proto, frames] : points) {
+    auto it = frames.begin();
+    while (it != frames.end()) {
+      PlantSkate plant = proto;
+      plant.first_frame = plant.last_frame = plant.worst_frame = *it;
+      for (++it; it != frames.end() && *it == plant.last_frame + 1; ++it) plant.last_frame = *it;
+      plants.push_back(plant);
+    }
+  }
+  return plants;
+}
+
+SkateSummary foot_skate(const ConstraintSet& set, const Motion& motion) {
+  SkateSummary out;
+  out.plants = find_plants(set);
+  const PoseCache poses(std::span<const Motion>(&motion, 1));
+  for (PlantSkate& plant : out.plants) {
+    const Eigen::Vector3d start = poses.point(plant.point, plant.first_frame);
+    for (int f = plant.first_frame + 1; f <= plant.last_frame; ++f) {
+      const Eigen::Vector3d p = poses.point(plant.point, f);
+      const double travel = std::hypot(p.x() - start.x(), p.z() - start.z());
+      if (travel > plant.travel) {
+        plant.travel = travel;
+        plant.worst_frame = f;
+      }
+    }
+    out.worst = std::max(out.worst, plant.travel);
+    out.mean += plant.travel;
+  }
+  if (!out.plants.empty()) out.mean /= static_cast<double>(out.plants.size());
+  return out;
+}
+
+// ---- jerk ----
+Eigen::VectorXd unwrap_angles(const Eigen::Ref<const Eigen::VectorXd>& x, bool wrap_first) {
+  Eigen::VectorXd y(x.size());
+  if (x.size() == 0) return y;
+  y(0) = wrap_first ? wrap_angle(x(0)) : x(0);
+  for (Eigen::Index f = 1; f < x.size(); ++f) y(f) = y(f - 1) + wrap_angle(x(f) - x(f - 1));
+  return y;
+}
+
+JerkFigures rms_jerk(const Motion& motion) {
+  motion.check();
+  return jerk_of(motion, [&](int c) -> Eigen::VectorXd {
+    if (channel_is_rotation(*motion.skeleton, c)) return unwrap_angles(motion.values.col(c));
+    return motion.values.col(c);
+  });
+}
+
+JerkFigures rms_jerk_of_displacement(const Motion& result, const Motion& reference) {
+  result.check();
+  reference.check();
+  check_same_layout(result, reference, "reference");
+  return jerk_of(result, [&](int c) { return displacement(result, reference, c); });
+}
+
+// ---- energy ----
+double key_cutoff_hz(double fps, int frames_per_key) {
+  if (!(fps > 0) || frames_per_key < 1)
+    throw std::invalid_argument("key_cutoff_hz: fps must be > 0 and frames_per_key >= 1");
+  return fps / (2.0 * frames_per_key);
+}
+
+namespace {
+// Orthonormal DCT-II of the columns of `x` (N x channels), by blocks of rows of the basis so
+// memory stays O(block N) for long clips.
+Eigen::MatrixXd dct2(const Eigen::MatrixXd& x) {
+  const Eigen::Index n = x.rows();
+  Eigen::MatrixXd out(n, x.cols());
+  const Eigen::Index block = 256;
+  Eigen::MatrixXd basis;
+  for (Eigen::Index m0 = 0; m0 < n; m0 += block) {
+    const Eigen::Index rows = std::min(block, n - m0);
+    basis.resize(rows, n);
+    for (Eigen::Index m = 0; m < rows; ++m) {
+      const double scale = std::sqrt((m0 + m == 0 ? 1.0 : 2.0) / static_cast<double>(n));
+      for (Eigen::Index k = 0; k < n; ++k)
+        basis(m, k) = scale * std::cos(kPi * static_cast<double>(m0 + m) * (2.0 * k + 1) / (2.0 * n));
+    }
+    out.middleRows(m0, rows).noalias() = basis * x;
+  }
+  return out;
+}
+
+// Adds one DCT column's energy to `band`.
+void add_energy(BandEnergy& band, const Eigen::Ref<const Eigen::VectorXd>& coefficients, double fps,
+                double cutoff) {
+  const Eigen::Index n = coefficients.size();
+  for (Eigen::Index m = 0; m < n; ++m) {
+    const double e = coefficients(m) * coefficients(m);
+    band.total += e;
+    if (m * fps / (2.0 * n) > cutoff) band.above += e;
+  }
+  ++band.channels;
+}
+
+void finish(BandEnergy& band) {
+  band.fraction = band.total > 0 ? band.above / band.total : 0.0;
+}
+}  // namespace
+
+BandEnergy energy_above(const Eigen::Ref<const Eigen::VectorXd>& signal, double fps, double cutoff_hz) {
+  BandEnergy band;
+  const Eigen::MatrixXd x = signal;
+  const Eigen::MatrixXd coefficients = dct2(x);
+  add_energy(band, coefficients.col(0), fps, cutoff_hz);
+  finish(band);
+  return band;
+}
+
+AddedEnergy energy_above_cutoff(const Motion& result, const Motion& reference,
+                                const std::vector<int>& frames_per_key) {
+  result.check();
+  reference.check();
+  check_same_layout(result, reference, "reference");
+  const int channels = static_cast<int>(result.values.cols());
+  if (frames_per_key.size() != 1 && static_cast<int>(frames_per_key.size()) != channels)
+    throw std::invalid_argument("metrics: key spacing has " + std::to_string(frames_per_key.size()) +
+                                " entries, expected 1 or the motion's " + std::to_string(channels) +
+                                " channels");
+  Eigen::MatrixXd d(result.frame_count(), channels);
+  for (int c = 0; c < channels; ++c) d.col(c) = displacement(result, reference, c);
+  const Eigen::MatrixXd coefficients = dct2(d);
+  AddedEnergy out;
+  out.min_cutoff_hz = std::numeric_limits<double>::infinity();
+  out.max_cutoff_hz = 0;
+  for (int c = 0; c < channels; ++c) {
+    const int k =
+        frames_per_key.size() == 1 ? frames_per_key[0] : frames_per_key[static_cast<std::size_t>(c)];
+    const double cutoff = key_cutoff_hz(result.fps, k);
+    out.min_cutoff_hz = std::min(out.min_cutoff_hz, cutoff);
+    out.max_cutoff_hz = std::max(out.max_cutoff_hz, cutoff);
+    add_energy(channel_is_rotation(*result.skeleton, c) ? out.rotation : out.translation, coefficients.col(c),
+               result.fps, cutoff);
+  }
+  if (channels == 0) out.min_cutoff_hz = 0;
+  finish(out.translation);
+  finish(out.rotation);
+  return out;
+}
+
+// ---- everything ----
+RetargetMetrics compute_metrics(const MetricsInputs& in) {
+  if (!in.result || !in.constraints || !in.kinds)
+    throw std::invalid_argument("metrics: a result motion, constraints and their kinds are required");
+  const Motion& result = *in.result;
+  result.check();
+  for (const Constraint& c : in.constraints->constraints) {
+    for (const PointRef& p : c.points)
+      if (p.character != 0)
+        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
+                                    std::to_string(p.character) + "; the metrics measure one character");
+    for (const ChannelRef& ch : c.channels)
+      if (ch.character != 0)
+        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
+                                    std::to_string(ch.character) + "; the metrics measure one character");
+  }
+  check_constraints(*in.constraints, *in.kinds);
+
+  RetargetMetrics out;
+  out.motion_name = result.name;
+  out.frames = result.frame_count();
+  out.fps = result.fps;
+  const PoseCache poses(std::span<const Motion>(&result, 1));
+  const ViolationSummary summary = summarize_violations(*in.constraints, *in.kinds, poses, in.tolerance);
+  for (const KindViolation& kv : summary.kinds) {
+    KindMetrics km{kv, false};
+    if (kv.kind != "orientation") {
+      for (const Constraint& c : in.constraints->constraints)
+        if (c.kind == kv.kind && !c.points.empty()) km.in_metres = true;
+    }
+    if (km.in_metres) out.worst_violation_metres = std::max(out.worst_violation_metres, kv.worst);
+    out.kinds.push_back(km);
+  }
+  out.skate = foot_skate(*in.constraints, result);
+  out.jerk = rms_jerk(result);
+  if (in.source) {
+    out.source_jerk = rms_jerk(*in.source);
+    out.displacement_jerk = rms_jerk_of_displacement(result, *in.source);
+  }
+  const Motion* reference = in.initial ? in.initial : in.source;
+  if (reference) {
+    out.energy_reference = in.initial ? "initial" : "source";
+    out.energy = energy_above_cutoff(result, *reference,
+                                     in.frames_per_key.empty() ? std::vector<int>{4} : in.frames_per_key);
+  }
+  out.solve_seconds = in.solve_seconds;
+  return out;
+}
+
+namespace {
+void write_jerk(graph::JsonWriter& w, const JerkFigures& j) {
+  w.begin_object();
+  w.field("translation_m_per_s3", j.translation);
+  w.field("rotation_rad_per_s3", j.rotation);
+  w.field("translation_channels", j.translation_channels);
+  w.field("rotation_channels", j.rotation_channels);
+  w.end_object();
+}
+void write_band(graph::JsonWriter& w, const BandEnergy& b) {
+  w.begin_object();
+  w.field("fraction", b.fraction);
+  w.field("above", b.above);
+  w.field("total", b.total);
+  w.field("channels", b.channels);
+  w.end_object();
+}
+}  // namespace
+
+void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
+  graph::JsonWriter w(os);
+  w.begin_object();
+  w.field("version", 1);
+  w.field("motion", m.motion_name);
+  w.field("frames", m.frames);
+  w.field("fps", m.fps);
+
+  w.key("violation");
+  w.begin_object();
+  w.field("worst_cm", 100 * m.worst_violation_metres);
+  w.key("kinds");
+  w.begin_array();
+  for (const KindMetrics& k : m.kinds) {
+    const double scale = k.in_metres ? 100.0 : 1.0;
+    w.begin_object();
+    w.field("kind", k.violation.kind);
+    w.field("unit", k.in_metres ? "cm" : "native");
+    w.field("worst", scale * k.violation.worst);
+    w.field("mean", scale * k.violation.mean);
+    w.field("rows", k.violation.rows);
+    w.field("counted_rows", k.violation.counted_rows);
+    w.field("violated_rows", k.violation.violated_rows);
+    w.field("worst_label", k.violation.worst_label);
+    w.field("worst_frame", k.violation.worst_frame);
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+
+  w.key("foot_skate_cm");
+  w.begin_object();
+  w.field("worst", 100 * m.skate.worst);
+  w.field("mean", 100 * m.skate.mean);
+  w.field("plants_count", m.skate.plants.size());
+  w.key("plants");
+  w.begin_array();
+  for (const PlantSkate& p : m.skate.plants) {
+    w.begin_object();
+    w.field("label", p.label);
+    w.field("joint", p.point.joint);
+    w.field("first_frame", p.first_frame);
+    w.field("last_frame", p.last_frame);
+    w.field("travel", 100 * p.travel);
+    w.field("worst_frame", p.worst_frame);
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+
+  w.key("jerk");
+  w.begin_object();
+  w.key("result");
+  write_jerk(w, m.jerk);
+  w.key("source");
+  if (m.source_jerk)
+    write_jerk(w, *m.source_jerk);
+  else
+    w.null();
+  w.key("increase");
+  if (m.source_jerk) {
+    w.begin_object();
+    w.field("translation_m_per_s3", m.jerk.translation - m.source_jerk->translation);
+    w.field("rotation_rad_per_s3", m.jerk.rotation - m.source_jerk->rotation);
+    w.end_object();
+  } else {
+    w.null();
+  }
+  w.key("displacement");
+  if (m.displacement_jerk)
+    write_jerk(w, *m.displacement_jerk);
+  else
+    w.null();
+  w.end_object();
+
+  w.key("energy_above_cutoff");
+  if (m.energy) {
+    w.begin_object();
+    w.field("reference", m.energy_reference);
+    w.field("cutoff_hz_min", m.energy->min_cutoff_hz);
+    w.field("cutoff_hz_max", m.energy->max_cutoff_hz);
+    w.key("translation");
+    write_band(w, m.energy->translation);
+    w.key("rotation");
+    write_band(w, m.energy->rotation);
+    w.end_object();
+  } else {
+    w.null();
+  }
+  w.field("solve_seconds", m.solve_seconds);
+  w.end_object();
+  os << '\n';
+}
+
+}  // namespace kg::retarget

@@ -1,0 +1,1099 @@
+#include "kg/retarget/spacetime.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numeric>
+#include <span>
+#include <stdexcept>
+#include <string>
+
+#include "kg/motion/kinematics.hpp"
+
+namespace kg::retarget {
+
+namespace {
+
+using motion::FrameMatrix;
+using motion::Skeleton;
+
+std::string label_of(const Constraint& c) {
+  return "constraint '" + (c.label.empty() ? std::string("(unlabelled)") : c.label) + "' (" + c.kind + ")";
+}
+
+// --- problem set-up ---------------------------------------------------------------------------
+
+struct Character {
+  const Skeleton* base = nullptr;
+  std::vector<const Skeleton*> skeleton;  // per frame
+  FrameMatrix m1;
+  DisplacementLayout layout;
+  std::vector<bool> free;
+  Eigen::VectorXd sensitivity;
+  int x_offset = 0;  // of its controls in x
+  int c_offset = 0;  // of its channels among all characters' channels
+  int channels = 0, joints = 0;
+  std::vector<int> stamp;  // per channel: last group that touched it
+  std::vector<std::vector<int>> chain;  // per joint: influencing channels (lazily filled)
+  // Per evaluation.
+  FrameMatrix values;
+  std::vector<Eigen::Isometry3d> world;  // frame * joints + joint
+  // Scratch of the per-frame accumulation.
+  Eigen::MatrixXd normal;  // channels x channels
+  Eigen::VectorXd gradient;
+};
+
+// A (character, frame) a sample reads, and the free channels whose values move what it reads.
+struct Piece {
+  int character = 0;
+  int frame = 0;
+  std::vector<int> channels;  // sorted
+  std::size_t g_offset = 0;   // rows x channels.size() derivatives, column-major, in g_
+};
+
+struct SampleInfo {
+  int constraint = 0;
+  int sample = 0;
+  int row_offset = 0;
+  int rows = 0;
+  std::vector<Piece> pieces;
+  // Point p: its piece, and for each channel of its chain the position in that piece (-1: frozen).
+  std::vector<int> point_piece;
+  std::vector<std::vector<int>> point_pos;
+  std::vector<int> value_piece, value_pos;
+};
+
+struct KindInfo {
+  const ConstraintKind* kind = nullptr;
+  int rows = 0;
+  std::vector<char> inequality;
+};
+
+struct Group {  // single-piece samples of one (character, frame)
+  int character = 0, frame = 0;
+  std::vector<int> samples;
+  std::vector<int> touched;  // per assembly
+};
+
+struct PassOutcome {
+  bool converged = false;
+  int iterations = 0;
+  int bandwidth = 0;
+  int unknowns = 0;
+  std::string stop_reason;
+};
+
+class Pass {
+ public:
+  Pass(std::vector<Character>& chars, const ConstraintSet& set, const std::vector<KindInfo>& kinds,
+       const SpacetimeOptions& options, bool honour_frozen)
+      : chars_(chars), set_(set), kinds_(kinds), options_(options) {
+    frames_ = chars_[0].layout.frames();
+    for (Character& ch : chars_) {
+      ch.x_offset = x_size_;
+      x_size_ += ch.layout.unknown_count();
+      ch.c_offset = channel_total_;
+      channel_total_ += ch.channels;
+      ch.stamp.assign(static_cast<std::size_t>(ch.channels), -1);
+      if (!honour_frozen) ch.free.assign(static_cast<std::size_t>(ch.channels), true);
+      ch.normal = Eigen::MatrixXd::Zero(ch.channels, ch.channels);
+      ch.gradient = Eigen::VectorXd::Zero(ch.channels);
+      ch.world.resize(static_cast<std::size_t>(frames_) * ch.joints);
+      ch.chain.assign(static_cast<std::size_t>(ch.joints), {});
+    }
+    build_samples();
+  }
+
+  int unknown_total() const { return x_size_; }
+  int row_total() const { return rows_total_; }
+  const Eigen::VectorXd& residual() const { return r_; }
+  const std::vector<SampleInfo>& samples() const { return samples_; }
+  bool row_inequality(int row) const { return inequality_[static_cast<std::size_t>(row)] != 0; }
+
+  // Values, FK, residuals at x; with `jacobian` also the channel-space derivatives of the rows
+  // that are active (all rows when `all_rows`).
+  void evaluate(const Eigen::VectorXd& x, bool jacobian, bool all_rows = false) {
+    for (Character& ch : chars_) {
+      ch.values = ch.layout.apply(ch.m1, x.segment(ch.x_offset, ch.layout.unknown_count()));
+      for (int f = 0; f < frames_; ++f)
+        motion::forward_kinematics(*ch.skeleton[static_cast<std::size_t>(f)], ch.values.row(f),
+                                   std::span(ch.world.data() + static_cast<std::size_t>(f) * ch.joints,
+                                             static_cast<std::size_t>(ch.joints)));
+    }
+    for (SampleInfo& s : samples_) evaluate_sample(s, jacobian, all_rows);
+  }
+
+  // F(x) of the last evaluation at x.
+  double objective(const Eigen::VectorXd& x) const {
+    double f = 0;
+    for (int i = 0; i < rows_total_; ++i) {
+      double r = r_[i];
+      if (inequality_[static_cast<std::size_t>(i)] && r > 0) r = 0;
+      const double w = weight_[static_cast<std::size_t>(i)];
+      f += w * w * r * r;
+    }
+    double reg = 0;
+    for (const Character& ch : chars_)
+      for (int c = 0; c < ch.channels; ++c) {
+        if (!ch.free[static_cast<std::size_t>(c)]) continue;
+        reg += ch.sensitivity[c] *
+               x.segment(ch.x_offset + ch.layout.offset(c), ch.layout.control_count(c)).squaredNorm();
+      }
+    return 0.5 * f + 0.5 * options_.epsilon * reg;
+  }
+
+  bool within_tolerance() const {
+    for (int i = 0; i < rows_total_; ++i) {
+      const double r = r_[i];
+      if (inequality_[static_cast<std::size_t>(i)]) {
+        if (-r > options_.inequality_tolerance) return false;
+      } else if (std::abs(r) > options_.equality_tolerance) {
+        return false;
+      }
+    }
+    return true;
+  }
+
+  // The Gauss-Newton step at the last evaluation (made with jacobian = true); returns the
+  // directional derivative of F along it.
+  // `lambda` adds lambda M to the matrix only (Levenberg-Marquardt: shorter, better-aimed steps
+  // where the linearisation is poor), not to the objective.
+  double step(const Eigen::VectorXd& x, Eigen::VectorXd& dx, double lambda) {
+    assemble(x);
+    for (int i = 0; i < band_.size(); ++i) band_.at(i, i) += lambda * band_sensitivity_[static_cast<std::size_t>(i)];
+    dx.setZero(x_size_);
+    double slope = 0;
+    // Free channels no active row touches: eps M dx = -eps M x.
+    for (const Character& ch : chars_)
+      for (int c = 0; c < ch.channels; ++c) {
+        if (!ch.free[static_cast<std::size_t>(c)] || band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
+        const int o = ch.x_offset + ch.layout.offset(c);
+        const int n = ch.layout.control_count(c);
+        dx.segment(o, n) = -options_.epsilon / (options_.epsilon + lambda) * x.segment(o, n);
+        slope += options_.epsilon * ch.sensitivity[c] * x.segment(o, n).dot(dx.segment(o, n));
+      }
+    if (band_.size() > 0) {
+      if (!band_.factor())
+        throw std::runtime_error("spacetime: the normal matrix is not positive definite (epsilon too small?)");
+      Eigen::VectorXd y = -grad_;
+      band_.solve(y);
+      for (int i = 0; i < band_.size(); ++i) {
+        dx[band_global_[static_cast<std::size_t>(i)]] = y[i];
+        slope += grad_[i] * y[i];
+      }
+    }
+    return slope;
+  }
+
+  int bandwidth() const { return band_.bandwidth(); }
+  // Working set of a blocked step: inequality rows satisfied at x (r_at_x) that the trial point
+  // (the last evaluation) violates beyond `tolerance` join the active set, so the next step
+  // resists crossing them instead of the line search cutting every step short. Returns how many.
+  int hold_blocking(const Eigen::VectorXd& r_at_x, double tolerance) {
+    int n = 0;
+    for (int i = 0; i < rows_total_; ++i) {
+      const std::size_t k = static_cast<std::size_t>(i);
+      if (inequality_[k] && !held_[k] && r_at_x[i] >= 0 && r_[i] < -tolerance) {
+        held_[k] = 1;
+        ++n;
+      }
+    }
+    return n;
+  }
+  // Held rows that the iterate left well inside (r > margin) leave the working set.
+  void release_held(double margin) {
+    for (int i = 0; i < rows_total_; ++i)
+      if (held_[static_cast<std::size_t>(i)] && r_[i] > margin) held_[static_cast<std::size_t>(i)] = 0;
+  }
+  double worst_violation() const {
+    double w = 0;
+    for (int i = 0; i < rows_total_; ++i)
+      w = std::max(w, inequality_[static_cast<std::size_t>(i)] ? -r_[i] : std::abs(r_[i]));
+    return w;
+  }
+  int active_count() const {
+    int n = 0;
+    for (int i = 0; i < rows_total_; ++i) n += row_active(i) ? 1 : 0;
+    return n;
+  }
+  int band_size() const { return band_.size(); }
+
+  // Dense d(w r)/dx of every row at the last evaluation (made with all_rows = true).
+  Eigen::MatrixXd dense_jacobian() const {
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(rows_total_, x_size_);
+    for (const SampleInfo& s : samples_) {
+      const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+      for (const Piece& p : s.pieces) {
+        const Character& ch = chars_[static_cast<std::size_t>(p.character)];
+        const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + p.g_offset, s.rows,
+                                                  static_cast<Eigen::Index>(p.channels.size()));
+        for (std::size_t i = 0; i < p.channels.size(); ++i) {
+          const int c = p.channels[i];
+          const BasisAt& b = ch.layout.basis(c, p.frame);
+          for (int q = 0; q < 4; ++q)
+            J.col(ch.x_offset + ch.layout.unknown(c, b.first + q)).segment(s.row_offset, s.rows) +=
+                w * b.weight[static_cast<std::size_t>(q)] * G.col(static_cast<Eigen::Index>(i));
+        }
+      }
+    }
+    return J;
+  }
+
+  Eigen::VectorXd weighted_residual() const {
+    Eigen::VectorXd r = r_;
+    for (int i = 0; i < rows_total_; ++i) r[i] *= weight_[static_cast<std::size_t>(i)];
+    return r;
+  }
+
+ private:
+  const std::vector<int>& chain(Character& ch, int joint) {
+    std::vector<int>& c = ch.chain[static_cast<std::size_t>(joint)];
+    if (c.empty()) c = motion::influencing_channels(*ch.base, joint);
+    return c;
+  }
+
+  void build_samples() {
+    std::map<std::pair<int, int>, int> group_of;
+    for (std::size_t ci = 0; ci < set_.constraints.size(); ++ci) {
+      const Constraint& con = set_.constraints[ci];
+      const KindInfo& kind = kinds_[ci];
+      for (std::size_t si = 0; si < con.samples.size(); ++si) {
+        const Sample& sample = con.samples[si];
+        SampleInfo s;
+        s.constraint = static_cast<int>(ci);
+        s.sample = static_cast<int>(si);
+        s.row_offset = rows_total_;
+        s.rows = kind.rows;
+        auto piece_of = [&](int character, int frame) {
+          for (std::size_t i = 0; i < s.pieces.size(); ++i)
+            if (s.pieces[i].character == character && s.pieces[i].frame == frame) return static_cast<int>(i);
+          s.pieces.push_back({character, frame, {}, 0});
+          return static_cast<int>(s.pieces.size() - 1);
+        };
+        const std::size_t np = con.points.size();
+        for (std::size_t p = 0; p < np; ++p) {
+          const PointRef& pr = con.points[p];
+          Character& ch = chars_[static_cast<std::size_t>(pr.character)];
+          const int piece = piece_of(pr.character, sample.frames[p]);
+          s.point_piece.push_back(piece);
+          for (int c : chain(ch, pr.joint))
+            if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
+        }
+        for (std::size_t v = 0; v < con.channels.size(); ++v) {
+          const ChannelRef& cr = con.channels[v];
+          const int piece = piece_of(cr.character, sample.frames[np + v]);
+          s.value_piece.push_back(piece);
+          if (chars_[static_cast<std::size_t>(cr.character)].free[static_cast<std::size_t>(cr.channel)])
+            s.pieces[static_cast<std::size_t>(piece)].channels.push_back(cr.channel);
+        }
+        for (Piece& piece : s.pieces) {
+          std::sort(piece.channels.begin(), piece.channels.end());
+          piece.channels.erase(std::unique(piece.channels.begin(), piece.channels.end()), piece.channels.end());
+          piece.g_offset = g_size_;
+          g_size_ += static_cast<std::size_t>(s.rows) * piece.channels.size();
+        }
+        auto position = [](const Piece& piece, int c) {
+          auto it = std::lower_bound(piece.channels.begin(), piece.channels.end(), c);
+          return it != piece.channels.end() && *it == c ? static_cast<int>(it - piece.channels.begin()) : -1;
+        };
+        for (std::size_t p = 0; p < np; ++p) {
+          const PointRef& pr = con.points[p];
+          const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
+          std::vector<int> pos;
+          for (int c : chain(chars_[static_cast<std::size_t>(pr.character)], pr.joint))
+            pos.push_back(position(piece, c));
+          s.point_pos.push_back(std::move(pos));
+        }
+        for (std::size_t v = 0; v < con.channels.size(); ++v)
+          s.value_pos.push_back(
+              position(s.pieces[static_cast<std::size_t>(s.value_piece[v])], con.channels[v].channel));
+        for (int r = 0; r < s.rows; ++r) {
+          inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
+          weight_.push_back(con.weight);
+        }
+        rows_total_ += s.rows;
+        max_rows_ = std::max(max_rows_, s.rows);
+        max_points_ = std::max(max_points_, static_cast<int>(np));
+        max_values_ = std::max(max_values_, static_cast<int>(con.channels.size()));
+        const int index = static_cast<int>(samples_.size());
+        if (s.pieces.size() == 1) {
+          const auto key = std::make_pair(s.pieces[0].character, s.pieces[0].frame);
+          auto it = group_of.find(key);
+          if (it == group_of.end()) {
+            it = group_of.emplace(key, static_cast<int>(groups_.size())).first;
+            groups_.push_back({key.first, key.second, {}, {}});
+          }
+          groups_[static_cast<std::size_t>(it->second)].samples.push_back(index);
+        } else if (!s.pieces.empty()) {
+          multi_.push_back(index);
+        }
+        samples_.push_back(std::move(s));
+      }
+    }
+    r_ = Eigen::VectorXd::Zero(rows_total_);
+    g_.assign(g_size_, 0.0);
+    points_.resize(static_cast<std::size_t>(max_points_));
+    values_.resize(static_cast<std::size_t>(max_values_));
+    d_points_ = Eigen::MatrixXd::Zero(max_rows_, 3 * max_points_);
+    d_values_ = Eigen::MatrixXd::Zero(max_rows_, max_values_);
+    int max_channels = 0;
+    for (const Character& ch : chars_) max_channels = std::max(max_channels, ch.channels);
+    jac_.resize(3, max_channels);
+    active_.assign(static_cast<std::size_t>(rows_total_), 0);
+    held_.assign(static_cast<std::size_t>(rows_total_), 0);
+    band_channel_.assign(static_cast<std::size_t>(channel_total_), 0);  // indexed c_offset + c
+  }
+
+  bool row_active(int row) const {
+    const std::size_t i = static_cast<std::size_t>(row);
+    return !inequality_[i] || r_[row] < 0 || held_[i];
+  }
+
+  void evaluate_sample(SampleInfo& s, bool jacobian, bool all_rows) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(s.constraint)];
+    const Sample& sample = con.samples[static_cast<std::size_t>(s.sample)];
+    const KindInfo& kind = kinds_[static_cast<std::size_t>(s.constraint)];
+    const std::size_t np = con.points.size(), nv = con.channels.size();
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      const Character& ch = chars_[static_cast<std::size_t>(pr.character)];
+      points_[p] = ch.world[static_cast<std::size_t>(sample.frames[p]) * ch.joints + pr.joint] * pr.local;
+    }
+    for (std::size_t v = 0; v < nv; ++v) {
+      const ChannelRef& cr = con.channels[v];
+      values_[v] = chars_[static_cast<std::size_t>(cr.character)].values(sample.frames[np + v], cr.channel);
+    }
+    const std::vector<double>& params = sample.params.empty() ? con.params : sample.params;
+    auto dp = d_points_.topLeftCorner(s.rows, static_cast<Eigen::Index>(3 * np));
+    auto dv = d_values_.topLeftCorner(s.rows, static_cast<Eigen::Index>(nv));
+    dp.setZero();
+    dv.setZero();
+    kind.kind->evaluate(con, params, std::span<const Eigen::Vector3d>(points_.data(), np),
+                        std::span<const double>(values_.data(), nv), r_.segment(s.row_offset, s.rows), dp, dv);
+    if (!jacobian) return;
+    bool any = false;
+    for (int r = 0; r < s.rows; ++r) {
+      const bool a = all_rows || row_active(s.row_offset + r);
+      active_[static_cast<std::size_t>(s.row_offset + r)] = a;
+      any = any || a;
+    }
+    if (!any) return;
+    for (const Piece& piece : s.pieces)
+      std::fill_n(g_.data() + piece.g_offset, static_cast<std::size_t>(s.rows) * piece.channels.size(), 0.0);
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      Character& ch = chars_[static_cast<std::size_t>(pr.character)];
+      const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
+      if (piece.channels.empty()) continue;
+      const int f = sample.frames[p];
+      auto J = jac_.leftCols(ch.channels);
+      motion::point_jacobian(*ch.skeleton[static_cast<std::size_t>(f)], ch.values.row(f),
+                             std::span<const Eigen::Isometry3d>(ch.world.data() + static_cast<std::size_t>(f) * ch.joints,
+                                                                static_cast<std::size_t>(ch.joints)),
+                             pr.joint, pr.local, J);
+      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows, static_cast<Eigen::Index>(piece.channels.size()));
+      const std::vector<int>& chain_channels = ch.chain[static_cast<std::size_t>(pr.joint)];
+      const std::vector<int>& pos = s.point_pos[p];
+      for (std::size_t k = 0; k < pos.size(); ++k) {
+        if (pos[k] < 0) continue;
+        const Eigen::Vector3d col = J.col(chain_channels[k]);
+        for (int r = 0; r < s.rows; ++r)
+          G(r, pos[k]) += dp.row(r).segment<3>(static_cast<Eigen::Index>(3 * p)).dot(col);
+      }
+    }
+    for (std::size_t v = 0; v < nv; ++v) {
+      if (s.value_pos[v] < 0) continue;
+      const Piece& piece = s.pieces[static_cast<std::size_t>(s.value_piece[v])];
+      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows, static_cast<Eigen::Index>(piece.channels.size()));
+      G.col(s.value_pos[v]) += dv.col(static_cast<Eigen::Index>(v));
+    }
+  }
+
+  // The residual a row contributes to the gradient: a held, satisfied inequality row none (it
+  // only resists moving along its Jacobian), so the gradient stays that of F.
+  double rho(int row) const {
+    const double r = r_[row];
+    return inequality_[static_cast<std::size_t>(row)] && r > 0 ? 0.0 : r;
+  }
+
+  bool sample_active(const SampleInfo& s) const {
+    for (int r = 0; r < s.rows; ++r)
+      if (active_[static_cast<std::size_t>(s.row_offset + r)]) return true;
+    return false;
+  }
+
+  int band_index(const Character& ch, int c, int control) const {
+    return band_index_[static_cast<std::size_t>(ch.x_offset + ch.layout.unknown(c, control))];
+  }
+
+  // Normal equations of the active rows over the controls of the channels they touch.
+  void assemble(const Eigen::VectorXd& x) {
+    // 1. Channels the active rows touch.
+    std::vector<char> touched(band_channel_.size(), 0);
+    for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
+      Group& g = groups_[gi];
+      g.touched.clear();
+      Character& ch = chars_[static_cast<std::size_t>(g.character)];
+      for (int si : g.samples) {
+        const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+        if (!sample_active(s)) continue;
+        for (int c : s.pieces[0].channels) {
+          int& stamp = ch.stamp[static_cast<std::size_t>(c)];
+          if (stamp == static_cast<int>(gi)) continue;
+          stamp = static_cast<int>(gi);
+          g.touched.push_back(c);
+          touched[static_cast<std::size_t>(ch.c_offset + c)] = 1;
+        }
+      }
+    }
+    for (Character& ch : chars_) std::fill(ch.stamp.begin(), ch.stamp.end(), -1);
+    for (int si : multi_) {
+      const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+      if (!sample_active(s)) continue;
+      for (const Piece& p : s.pieces)
+        for (int c : p.channels) touched[static_cast<std::size_t>(chars_[static_cast<std::size_t>(p.character)].c_offset + c)] = 1;
+    }
+    // 2. Control-major order of their unknowns (rebuilt only when the set changes).
+    if (touched != band_channel_ || band_index_.empty()) {
+      band_channel_ = touched;
+      struct Item {
+        int frame, character, channel, control;
+      };
+      std::vector<Item> items;
+      for (std::size_t k = 0; k < chars_.size(); ++k) {
+        const Character& ch = chars_[k];
+        for (int c = 0; c < ch.channels; ++c) {
+          if (!band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
+          for (int j = 0; j < ch.layout.control_count(c); ++j)
+            items.push_back({ch.layout.control_frame(c, j), static_cast<int>(k), c, j});
+        }
+      }
+      std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
+        if (a.frame != b.frame) return a.frame < b.frame;
+        if (a.character != b.character) return a.character < b.character;
+        return a.channel < b.channel;
+      });
+      band_index_.assign(static_cast<std::size_t>(x_size_), -1);
+      band_global_.clear();
+      band_sensitivity_.clear();
+      for (const Item& it : items) {
+        const Character& ch = chars_[static_cast<std::size_t>(it.character)];
+        const int global = ch.x_offset + ch.layout.unknown(it.channel, it.control);
+        band_index_[static_cast<std::size_t>(global)] = static_cast<int>(band_global_.size());
+        band_global_.push_back(global);
+        band_sensitivity_.push_back(ch.sensitivity[it.channel]);
+      }
+    }
+    // 3. Bandwidth: the widest index span of one group or one multi-frame row.
+    int b = 0;
+    for (const Group& g : groups_) {
+      if (g.touched.empty()) continue;
+      const Character& ch = chars_[static_cast<std::size_t>(g.character)];
+      int lo = INT32_MAX, hi = -1;
+      for (int c : g.touched) {
+        const BasisAt& basis = ch.layout.basis(c, g.frame);
+        lo = std::min(lo, band_index(ch, c, basis.first));
+        hi = std::max(hi, band_index(ch, c, basis.first + 3));
+      }
+      b = std::max(b, hi - lo);
+    }
+    for (int si : multi_) {
+      const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+      if (!sample_active(s)) continue;
+      int lo = INT32_MAX, hi = -1;
+      for (const Piece& p : s.pieces) {
+        const Character& ch = chars_[static_cast<std::size_t>(p.character)];
+        for (int c : p.channels) {
+          const BasisAt& basis = ch.layout.basis(c, p.frame);
+          lo = std::min(lo, band_index(ch, c, basis.first));
+          hi = std::max(hi, band_index(ch, c, basis.first + 3));
+        }
+      }
+      if (hi >= 0) b = std::max(b, hi - lo);
+    }
+    const int n = static_cast<int>(band_global_.size());
+    band_.reset(n, std::min(b, std::max(0, n - 1)));
+    grad_.setZero(n);
+
+    // 4. Per-frame blocks: rows of one (character, frame) in channel space, then spread over the
+    //    4 controls per channel that frame weighs.
+    for (const Group& g : groups_) {
+      if (g.touched.empty()) continue;
+      Character& ch = chars_[static_cast<std::size_t>(g.character)];
+      for (int si : g.samples) {
+        const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+        if (!sample_active(s)) continue;
+        const Piece& piece = s.pieces[0];
+        const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+        const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
+                                                  static_cast<Eigen::Index>(piece.channels.size()));
+        const int m = static_cast<int>(piece.channels.size());
+        for (int r = 0; r < s.rows; ++r) {
+          if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
+          const double wr = w * w * rho(s.row_offset + r);
+          for (int i = 0; i < m; ++i) {
+            const int ci = piece.channels[static_cast<std::size_t>(i)];
+            const double gi = G(r, i);
+            if (gi == 0) continue;
+            ch.gradient[ci] += gi * wr;
+            const double wgi = w * w * gi;
+            for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
+          }
+        }
+      }
+      int ia[4], ib[4];
+      for (int a : g.touched) {
+        const BasisAt& ba = ch.layout.basis(a, g.frame);
+        for (int p = 0; p < 4; ++p) {
+          ia[p] = band_index(ch, a, ba.first + p);
+          grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
+        }
+        for (int bc : g.touched) {
+          const double nab = ch.normal(a, bc);
+          if (nab == 0) continue;
+          const BasisAt& bb = ch.layout.basis(bc, g.frame);
+          for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
+          for (int p = 0; p < 4; ++p) {
+            const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
+            for (int q = 0; q < 4; ++q)
+              if (ia[p] >= ib[q]) band_.at(ia[p], ib[q]) += wp * bb.weight[static_cast<std::size_t>(q)];
+          }
+        }
+      }
+      for (int a : g.touched) {
+        ch.gradient[a] = 0;
+        for (int bc : g.touched) ch.normal(a, bc) = 0;
+      }
+    }
+    // 5. Rows reading several frames or both characters: scattered row by row.
+    std::vector<std::pair<int, double>> row;
+    for (int si : multi_) {
+      const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+      if (!sample_active(s)) continue;
+      const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+      for (int r = 0; r < s.rows; ++r) {
+        if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
+        row.clear();
+        for (const Piece& p : s.pieces) {
+          const Character& ch = chars_[static_cast<std::size_t>(p.character)];
+          const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + p.g_offset, s.rows,
+                                                    static_cast<Eigen::Index>(p.channels.size()));
+          for (std::size_t i = 0; i < p.channels.size(); ++i) {
+            const double gi = w * G(r, static_cast<Eigen::Index>(i));
+            if (gi == 0) continue;
+            const BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
+            for (int q = 0; q < 4; ++q)
+              row.emplace_back(band_index(ch, p.channels[i], basis.first + q), gi * basis.weight[static_cast<std::size_t>(q)]);
+          }
+        }
+        const double wr = w * rho(s.row_offset + r);
+        for (const auto& [u, cu] : row) {
+          grad_[u] += cu * wr;
+          for (const auto& [v, cv] : row)
+            if (u >= v) band_.at(u, v) += cu * cv;
+        }
+      }
+    }
+    // 6. Damping.
+    for (int i = 0; i < n; ++i) {
+      const double em = options_.epsilon * band_sensitivity_[static_cast<std::size_t>(i)];
+      band_.at(i, i) += em;
+      grad_[i] += em * x[band_global_[static_cast<std::size_t>(i)]];
+    }
+  }
+
+  std::vector<Character>& chars_;
+  const ConstraintSet& set_;
+  const std::vector<KindInfo>& kinds_;
+  const SpacetimeOptions& options_;
+  int frames_ = 0;
+  int x_size_ = 0;
+  int channel_total_ = 0;
+  int rows_total_ = 0;
+  int max_rows_ = 0, max_points_ = 0, max_values_ = 0;
+  std::vector<SampleInfo> samples_;
+  std::vector<Group> groups_;
+  std::vector<int> multi_;
+  std::vector<char> inequality_;
+  std::vector<double> weight_;
+  std::vector<char> active_;
+  std::vector<char> held_;  // satisfied inequality rows kept in the working set (see hold_blocking)
+  Eigen::VectorXd r_;
+  std::vector<double> g_;
+  std::size_t g_size_ = 0;
+  std::vector<Eigen::Vector3d> points_;
+  std::vector<double> values_;
+  Eigen::MatrixXd d_points_, d_values_;
+  Eigen::Matrix<double, 3, Eigen::Dynamic> jac_;
+  // Band system.
+  std::vector<char> band_channel_;
+  std::vector<int> band_index_;   // global unknown -> band index, -1 outside the band
+  std::vector<int> band_global_;  // band index -> global unknown
+  std::vector<double> band_sensitivity_;
+  BandedCholesky band_;
+  Eigen::VectorXd grad_;
+};
+
+// --- validation -------------------------------------------------------------------------------
+
+std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
+  if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
+  if (problem.characters.size() > 2)
+    throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
+                                " characters (at most 2 are supported)");
+  if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
+  if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
+  const SpacetimeOptions& o = problem.options;
+  if (!(o.epsilon > 0) || !std::isfinite(o.epsilon))
+    throw std::invalid_argument("spacetime: epsilon " + std::to_string(o.epsilon) + " (expected > 0)");
+  if (!(o.equality_tolerance > 0) || !(o.inequality_tolerance > 0))
+    throw std::invalid_argument("spacetime: tolerances must be > 0");
+  if (o.max_iterations < 0) throw std::invalid_argument("spacetime: max_iterations < 0");
+  const int frames = problem.characters[0].initial.frame_count();
+  for (std::size_t k = 0; k < problem.characters.size(); ++k) {
+    const CharacterProblem& cp = problem.characters[k];
+    const std::string who = "spacetime: character " + std::to_string(k) + ": ";
+    if (!cp.initial.skeleton) throw std::invalid_argument(who + "initial motion has no skeleton");
+    try {
+      cp.initial.check();
+    } catch (const std::exception& e) {
+      throw std::invalid_argument(who + e.what());
+    }
+    const Skeleton& s = *cp.initial.skeleton;
+    if (cp.initial.frame_count() < 1) throw std::invalid_argument(who + "initial motion has no frames");
+    if (cp.initial.frame_count() != frames)
+      throw std::invalid_argument(who + std::to_string(cp.initial.frame_count()) + " frames, character 0 has " +
+                                  std::to_string(frames) + " (both must have the same frames)");
+    if (std::abs(cp.initial.fps - problem.characters[0].initial.fps) > 1e-9)
+      throw std::invalid_argument(who + "frame rate differs from character 0's");
+    if (!cp.frames_per_key.empty()) {
+      if (static_cast<int>(cp.frames_per_key.size()) != s.channel_count())
+        throw std::invalid_argument(who + std::to_string(cp.frames_per_key.size()) + " key spacings for " +
+                                    std::to_string(s.channel_count()) + " channels");
+      for (int k2 : cp.frames_per_key)
+        if (k2 < 1) throw std::invalid_argument(who + "key spacing " + std::to_string(k2) + " (expected >= 1 frame)");
+    }
+    if (!cp.frozen.empty() && static_cast<int>(cp.frozen.size()) != s.channel_count())
+      throw std::invalid_argument(who + std::to_string(cp.frozen.size()) + " frozen flags for " +
+                                  std::to_string(s.channel_count()) + " channels");
+    if (!cp.skeleton_per_frame.empty()) {
+      if (static_cast<int>(cp.skeleton_per_frame.size()) != frames)
+        throw std::invalid_argument(who + std::to_string(cp.skeleton_per_frame.size()) + " per-frame skeletons for " +
+                                    std::to_string(frames) + " frames");
+      for (const auto& sk : cp.skeleton_per_frame)
+        if (!sk || sk->joint_count() != s.joint_count() || sk->channel_count() != s.channel_count())
+          throw std::invalid_argument(who + "a per-frame skeleton differs in structure from the motion's");
+    }
+  }
+  const ConstraintSet& set = *problem.constraints;
+  std::vector<KindInfo> kinds;
+  for (const Constraint& c : set.constraints) {
+    KindInfo info;
+    info.kind = problem.kinds(c.kind);
+    if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
+    info.kind->check(c);
+    info.rows = info.kind->rows(c);
+    if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
+    for (int r = 0; r < info.rows; ++r) info.inequality.push_back(info.kind->is_inequality(c, r) ? 1 : 0);
+    if (!(c.weight > 0) || !std::isfinite(c.weight))
+      throw std::invalid_argument(label_of(c) + ": weight " + std::to_string(c.weight) + " (expected > 0)");
+    const int nchar = static_cast<int>(problem.characters.size());
+    for (const PointRef& p : c.points) {
+      if (p.character < 0 || p.character >= nchar)
+        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(p.character) +
+                                    " but the problem has " + std::to_string(nchar));
+      const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
+      if (p.joint < 0 || p.joint >= s.joint_count())
+        throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
+                                    std::to_string(s.joint_count()) + " joints)");
+      if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
+    }
+    for (const ChannelRef& ch : c.channels) {
+      if (ch.character < 0 || ch.character >= nchar)
+        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +
+                                    " but the problem has " + std::to_string(nchar));
+      const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
+      if (ch.channel < 0 || ch.channel >= s.channel_count())
+        throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
+                                    std::to_string(s.channel_count()) + " channels)");
+    }
+    const std::size_t want = c.points.size() + c.channels.size();
+    for (const Sample& sm : c.samples) {
+      if (sm.frames.size() != want)
+        throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
+                                    " frames, expected " + std::to_string(want) + " (one per point and channel)");
+      for (int f : sm.frames)
+        if (f < 0 || f >= frames)
+          throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
+                                      std::to_string(frames - 1) + "]");
+    }
+    kinds.push_back(std::move(info));
+  }
+  return kinds;
+}
+
+std::vector<Character> make_characters(const SpacetimeProblem& problem, const std::vector<FrameMatrix>& m1,
+                                       const std::vector<std::vector<int>>& spacing) {
+  std::vector<Character> chars;
+  for (std::size_t k = 0; k < problem.characters.size(); ++k) {
+    const CharacterProblem& cp = problem.characters[k];
+    Character ch;
+    ch.base = cp.initial.skeleton.get();
+    ch.channels = ch.base->channel_count();
+    ch.joints = ch.base->joint_count();
+    ch.m1 = m1[k];
+    const int frames = static_cast<int>(ch.m1.rows());
+    for (int f = 0; f < frames; ++f)
+      ch.skeleton.push_back(cp.skeleton_per_frame.empty() ? ch.base : cp.skeleton_per_frame[static_cast<std::size_t>(f)].get());
+    ch.layout = DisplacementLayout(frames, spacing[k]);
+    ch.free.assign(static_cast<std::size_t>(ch.channels), true);
+    for (std::size_t c = 0; c < cp.frozen.size(); ++c) ch.free[c] = !cp.frozen[c];
+    ch.sensitivity = channel_sensitivity(*ch.base);
+    chars.push_back(std::move(ch));
+  }
+  return chars;
+}
+
+std::string format_length(double metres, bool in_metres) {
+  char buf[64];
+  if (!in_metres)
+    std::snprintf(buf, sizeof buf, "%.3g", metres);
+  else if (metres >= 0.01)
+    std::snprintf(buf, sizeof buf, "%.1f cm", metres * 100);
+  else
+    std::snprintf(buf, sizeof buf, "%.2f mm", metres * 1000);
+  return buf;
+}
+
+}  // namespace
+
+void BandedCholesky::reset(int n, int b) {
+  n_ = n;
+  b_ = b;
+  data_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(b + 1), 0.0);
+}
+
+bool BandedCholesky::factor() {
+  const int w = b_ + 1;
+  for (int i = 0; i < n_; ++i) {
+    double* Li = data_.data() + static_cast<std::size_t>(i) * w;
+    const int j0 = std::max(0, i - b_);
+    for (int j = j0; j <= i; ++j) {
+      const double* Lj = data_.data() + static_cast<std::size_t>(j) * w;
+      const int len = j - j0;
+      double s = Li[j - i + b_];
+      if (len > 0)
+        s -= Eigen::Map<const Eigen::VectorXd>(Li + (j0 - i + b_), len)
+                 .dot(Eigen::Map<const Eigen::VectorXd>(Lj + (j0 - j + b_), len));
+      if (j < i) {
+        Li[j - i + b_] = s / Lj[b_];
+      } else {
+        if (!(s > 0)) return false;
+        Li[b_] = std::sqrt(s);
+      }
+    }
+  }
+  return true;
+}
+
+void BandedCholesky::solve(Eigen::VectorXd& y) const {
+  const int w = b_ + 1;
+  for (int i = 0; i < n_; ++i) {
+    const double* Li = data_.data() + static_cast<std::size_t>(i) * w;
+    const int j0 = std::max(0, i - b_);
+    double s = y[i];
+    if (i > j0) s -= Eigen::Map<const Eigen::VectorXd>(Li + (j0 - i + b_), i - j0).dot(y.segment(j0, i - j0));
+    y[i] = s / Li[b_];
+  }
+  for (int i = n_ - 1; i >= 0; --i) {
+    const double* Li = data_.data() + static_cast<std::size_t>(i) * w;
+    y[i] /= Li[b_];
+    const double yi = y[i];
+    const int j0 = std::max(0, i - b_);
+    for (int j = j0; j < i; ++j) y[j] -= Li[j - i + b_] * yi;
+  }
+}
+
+const char* to_string(SpacetimeStatus status) {
+  return status == SpacetimeStatus::Converged ? "converged" : "not converged";
+}
+
+double SpacetimeResult::worst_violation() const {
+  double w = 0;
+  for (const KindReport& k : kinds) w = std::max(w, k.worst());
+  return w;
+}
+
+Eigen::VectorXd channel_sensitivity(const Skeleton& skeleton) {
+  const int nj = skeleton.joint_count();
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(nj));
+  const Eigen::RowVectorXd rest = Eigen::RowVectorXd::Zero(skeleton.channel_count());
+  motion::forward_kinematics(skeleton, rest, world);
+  std::vector<double> reach(static_cast<std::size_t>(nj), 0.0);
+  auto spread = [&](int from, const Eigen::Vector3d& p) {
+    for (int a = from; a >= 0; a = skeleton.joint(a).parent)
+      reach[static_cast<std::size_t>(a)] =
+          std::max(reach[static_cast<std::size_t>(a)], (p - world[static_cast<std::size_t>(a)].translation()).norm());
+  };
+  for (int j = 0; j < nj; ++j) {
+    spread(j, world[static_cast<std::size_t>(j)].translation());
+    for (const Eigen::Vector3d& e : skeleton.joint(j).end_sites) spread(j, world[static_cast<std::size_t>(j)] * e);
+  }
+  Eigen::VectorXd s(skeleton.channel_count());
+  for (int j = 0; j < nj; ++j) {
+    const motion::Joint& jt = skeleton.joint(j);
+    const double r = std::max(reach[static_cast<std::size_t>(j)], 0.02);
+    for (std::size_t c = 0; c < jt.channels.size(); ++c)
+      s[jt.first_channel + static_cast<int>(c)] = motion::is_rotation(jt.channels[c].kind) ? r * r : 1.0;
+  }
+  return s;
+}
+
+std::vector<DisplacementLayout> spacetime_layouts(const SpacetimeProblem& problem) {
+  std::vector<DisplacementLayout> layouts;
+  for (const CharacterProblem& cp : problem.characters) {
+    if (!cp.initial.skeleton) throw std::invalid_argument("spacetime: initial motion has no skeleton");
+    std::vector<int> k = cp.frames_per_key;
+    if (k.empty()) k.assign(static_cast<std::size_t>(cp.initial.skeleton->channel_count()), 4);
+    layouts.emplace_back(cp.initial.frame_count(), k);
+  }
+  return layouts;
+}
+
+SpacetimeLinearization linearize_spacetime(const SpacetimeProblem& problem, const Eigen::VectorXd& x) {
+  const std::vector<KindInfo> kinds = check_problem(problem);
+  std::vector<FrameMatrix> m1;
+  std::vector<std::vector<int>> spacing;
+  for (const DisplacementLayout& l : spacetime_layouts(problem)) {
+    std::vector<int> k;
+    for (int c = 0; c < l.channel_count(); ++c) k.push_back(l.spacing(c));
+    spacing.push_back(k);
+  }
+  for (const CharacterProblem& cp : problem.characters) m1.push_back(cp.initial.values);
+  std::vector<Character> chars = make_characters(problem, m1, spacing);
+  Pass pass(chars, *problem.constraints, kinds, problem.options, false);
+  if (x.size() != pass.unknown_total())
+    throw std::invalid_argument("linearize_spacetime: x has " + std::to_string(x.size()) + " entries, the problem " +
+                                std::to_string(pass.unknown_total()));
+  pass.evaluate(x, true, true);
+  SpacetimeLinearization out;
+  out.residual = pass.weighted_residual();
+  out.jacobian = pass.dense_jacobian();
+  for (int i = 0; i < pass.row_total(); ++i) out.inequality.push_back(pass.row_inequality(i));
+  return out;
+}
+
+SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
+  const auto start = std::chrono::steady_clock::now();
+  const std::vector<KindInfo> kinds = check_problem(problem);
+  const SpacetimeOptions& options = problem.options;
+  const ConstraintSet& set = *problem.constraints;
+
+  std::vector<FrameMatrix> m1;
+  std::vector<std::vector<int>> spacing;
+  for (const CharacterProblem& cp : problem.characters) {
+    m1.push_back(cp.initial.values);
+    spacing.push_back(cp.frames_per_key.empty()
+                          ? std::vector<int>(static_cast<std::size_t>(cp.initial.skeleton->channel_count()), 4)
+                          : cp.frames_per_key);
+  }
+
+  SpacetimeResult result;
+  Eigen::VectorXd final_residual;
+  std::vector<char> final_inequality;
+  bool converged = false;
+  std::string stop;
+  for (;;) {
+    ++result.passes;
+    std::vector<Character> chars = make_characters(problem, m1, spacing);
+    Pass pass(chars, set, kinds, options, true);
+    Eigen::VectorXd x = Eigen::VectorXd::Zero(pass.unknown_total());
+    Eigen::VectorXd dx, trial;
+    pass.evaluate(x, true);
+    double F = pass.objective(x);
+    int it = 0;
+    stop = "iteration limit";
+    converged = pass.within_tolerance();
+    double lambda = 1e-3;
+    double worst_before = pass.worst_violation();
+    Eigen::VectorXd r_at_x;
+    while (!converged && it < options.max_iterations) {
+      pass.release_held(10 * options.inequality_tolerance);
+      double slope = pass.step(x, dx, lambda);
+      result.bandwidth = pass.bandwidth();
+      ++it;
+      // Rows the full step would cross join the working set; the step is then solved again.
+      r_at_x = pass.residual();
+      bool full_step_evaluated = false;  // the last evaluation is at x + dx
+      for (int again = 0; again < 2 && slope < 0; ++again) {
+        trial = x + dx;
+        pass.evaluate(trial, false);
+        full_step_evaluated = true;
+        if (pass.hold_blocking(r_at_x, options.inequality_tolerance) == 0) break;
+        full_step_evaluated = false;
+        pass.evaluate(x, true);
+        slope = pass.step(x, dx, lambda);
+      }
+      if (!(slope < 0)) {
+        stop = "no descent direction";
+        break;
+      }
+      double alpha = 1;
+      bool accepted = false;
+      double F_trial = F;
+      for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
+        if (ls > 0 || !full_step_evaluated) {
+          trial = x + alpha * dx;
+          pass.evaluate(trial, false);
+        }
+        F_trial = pass.objective(trial);
+        if (F_trial <= F + 1e-4 * alpha * slope) {
+          accepted = true;
+          break;
+        }
+      }
+      if (!accepted) {
+        pass.evaluate(x, true);
+        stop = "line search failed";
+        break;
+      }
+      lambda = alpha == 1 ? std::max(lambda * 0.25, 1e-8) : std::min(lambda * 8 / alpha, 1e4);
+      const double step_norm = alpha * dx.lpNorm<Eigen::Infinity>();
+      const double decrease = F - F_trial;
+      x.swap(trial);
+      F = F_trial;
+      pass.evaluate(x, true);
+      converged = pass.within_tolerance();
+      if (options.trace) {
+        char line[200];
+        std::snprintf(line, sizeof line, "pass %d it %d: F %.6g worst %.3g alpha %.3g lambda %.2g |dx| %.3g band %d x %d active %d",
+                      result.passes, it, F, pass.worst_violation(), alpha, lambda, step_norm, pass.band_size(),
+                      pass.bandwidth(), pass.active_count());
+        options.trace(line);
+      }
+      if (converged) break;
+      // Stalled: what is left is what this key spacing can do (or the constraints contradict).
+      const double worst_now = pass.worst_violation();
+      const bool worst_stuck = worst_now > 0.99 * worst_before;
+      worst_before = worst_now;
+      if (step_norm < 1e-10 || decrease <= (alpha == 1 ? 1e-4 : 1e-7) * (F + decrease) ||
+          (worst_stuck && decrease <= 5e-3 * (F + decrease))) {
+        stop = "no further progress";
+        break;
+      }
+    }
+    result.iterations += it;
+    result.unknowns = 0;
+    for (const Character& ch : chars)
+      for (int c = 0; c < ch.channels; ++c)
+        if (ch.free[static_cast<std::size_t>(c)]) result.unknowns += ch.layout.control_count(c);
+    for (std::size_t k = 0; k < chars.size(); ++k) m1[k] = chars[k].values;  // m1 + d at x
+    final_residual = pass.residual();
+    final_inequality.clear();
+    for (int i = 0; i < pass.row_total(); ++i) final_inequality.push_back(pass.row_inequality(i) ? 1 : 0);
+    result.total_rows = pass.row_total();
+    result.frames_per_key = spacing;
+
+    // Per-kind and per-constraint violations of this pass's end.
+    std::map<std::string, KindReport> by_kind;
+    std::vector<ViolatedConstraint> violated;
+    result.active_rows = 0;
+    std::map<int, ViolatedConstraint> by_constraint;
+    for (const SampleInfo& s : pass.samples()) {
+      const Constraint& con = set.constraints[static_cast<std::size_t>(s.constraint)];
+      KindReport& kr = by_kind[con.kind];
+      kr.kind = con.kind;
+      const int first = con.samples[static_cast<std::size_t>(s.sample)].frames.empty()
+                            ? 0
+                            : con.samples[static_cast<std::size_t>(s.sample)].frames[0];
+      for (int r = 0; r < s.rows; ++r) {
+        const double v = final_residual[s.row_offset + r];
+        const bool ineq = final_inequality[static_cast<std::size_t>(s.row_offset + r)] != 0;
+        ++kr.rows;
+        const bool active = !ineq || v < 0;
+        if (active) ++kr.active_rows;
+        const double viol = ineq ? std::max(0.0, -v) : std::abs(v);
+        if (ineq)
+          kr.worst_inequality = std::max(kr.worst_inequality, viol);
+        else
+          kr.worst_equality = std::max(kr.worst_equality, viol);
+        const double tol = ineq ? options.inequality_tolerance : options.equality_tolerance;
+        if (viol > tol) {
+          auto [it2, fresh] = by_constraint.try_emplace(s.constraint);
+          ViolatedConstraint& vc = it2->second;
+          if (fresh) {
+            vc.kind = con.kind;
+            vc.label = con.label;
+            vc.first_frame = vc.last_frame = first;
+            vc.in_metres = !con.points.empty();
+          }
+          vc.worst = std::max(vc.worst, viol);
+          vc.first_frame = std::min(vc.first_frame, first);
+          vc.last_frame = std::max(vc.last_frame, first);
+        }
+      }
+    }
+    result.kinds.clear();
+    for (auto& [name, kr] : by_kind) {
+      result.active_rows += kr.active_rows;
+      result.kinds.push_back(kr);
+    }
+    result.violated.clear();
+    for (auto& [index, vc] : by_constraint) result.violated.push_back(vc);
+    std::sort(result.violated.begin(), result.violated.end(),
+              [](const ViolatedConstraint& a, const ViolatedConstraint& b) { return a.worst > b.worst; });
+
+    if (converged || !options.densify) break;
+    bool denser = false;
+    for (std::vector<int>& ks : spacing)
+      for (int& k : ks)
+        if (k > 1) {
+          k = std::max(1, k / 2);
+          denser = true;
+        }
+    if (!denser) break;
+  }
+
+  result.status = converged ? SpacetimeStatus::Converged : SpacetimeStatus::NotConverged;
+  for (std::size_t k = 0; k < problem.characters.size(); ++k) {
+    const motion::Motion& init = problem.characters[k].initial;
+    result.motions.push_back({init.skeleton, m1[k], init.fps, init.name});
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  char head[160];
+  if (converged) {
+    std::snprintf(head, sizeof head, "converged in %d iterations (%d pass%s), worst violation %s", result.iterations,
+                  result.passes, result.passes == 1 ? "" : "es",
+                  format_length(result.worst_violation(), true).c_str());
+    result.message = head;
+  } else {
+    double worst = 0;
+    bool metres = true;
+    for (const ViolatedConstraint& v : result.violated)
+      if (v.worst > worst) {
+        worst = v.worst;
+        metres = v.in_metres;
+      }
+    std::snprintf(head, sizeof head, "did not converge (%s after %d iterations, %d pass%s): %zu constraint%s still violated by up to %s",
+                  stop.c_str(), result.iterations, result.passes, result.passes == 1 ? "" : "es",
+                  result.violated.size(), result.violated.size() == 1 ? "" : "s",
+                  format_length(worst, metres).c_str());
+    std::string msg = head;
+    const std::size_t shown = std::min<std::size_t>(result.violated.size(), 5);
+    for (std::size_t i = 0; i < shown; ++i) {
+      const ViolatedConstraint& v = result.violated[i];
+      msg += i == 0 ? ": " : "; ";
+      msg += v.kind + " '" + v.label + "' frame" + (v.first_frame == v.last_frame ? " " + std::to_string(v.first_frame)
+                                                                                   : "s " + std::to_string(v.first_frame) + "-" +
+                                                                                         std::to_string(v.last_frame)) +
+             " (" + format_length(v.worst, v.in_metres) + ")";
+    }
+    if (result.violated.size() > shown) msg += "; ...";
+    result.message = msg;
+  }
+  return result;
+}
+
+}  // namespace kg::retarget

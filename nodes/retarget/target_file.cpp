@@ -1,0 +1,298 @@
+// Target files: the YAML of per-bone factors, lengths or morph keys, and skeleton files.
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "kg/graph/error.hpp"
+#include "kg/io/asf_amc.hpp"
+#include "kg/io/bvh.hpp"
+#include "kg/io/import_options.hpp"
+#include "kg/retarget/target.hpp"
+
+namespace kg::retarget {
+
+namespace {
+
+using graph::Error;
+using graph::SourceLocation;
+using motion::Skeleton;
+
+std::string in_quotes(const std::string& s) {
+  return "'" + s + "'";
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+class Reader {
+ public:
+  Reader(const Skeleton& source, std::string path) : source_(source), path_(std::move(path)) {}
+
+  SourceLocation at(const YAML::Node& n) const {
+    const YAML::Mark m = n.Mark();
+    if (m.line < 0) return {path_, 0, 0};
+    return {path_, m.line + 1, m.column + 1};
+  }
+  [[noreturn]] void fail(const std::string& message, const YAML::Node& where) const {
+    throw Error(message, at(where));
+  }
+
+  // Map entries in file order; duplicate keys refused; keys must be scalars.
+  struct Entry {
+    std::string key;
+    YAML::Node key_node, value;
+  };
+  std::vector<Entry> entries(const YAML::Node& map, const std::string& what) const {
+    if (!map.IsMap()) fail(what + " must be a map", map);
+    std::vector<Entry> out;
+    for (auto it = map.begin(); it != map.end(); ++it) {
+      if (!it->first.IsScalar()) fail("a key of " + what + " must be a plain text", it->first);
+      Entry e{it->first.Scalar(), it->first, it->second};
+      for (const Entry& prior : out)
+        if (prior.key == e.key)
+          fail("duplicate key " + in_quotes(e.key) + " in " + what + " (first at " +
+                   at(prior.key_node).to_string() + ")",
+               e.key_node);
+      out.push_back(std::move(e));
+    }
+    return out;
+  }
+  void check_keys(const std::vector<Entry>& es, const std::string& what,
+                  const std::vector<std::string>& allowed) const {
+    for (const Entry& e : es) {
+      if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
+      const std::string near = graph::nearest_name(e.key, allowed);
+      fail("unknown key " + in_quotes(e.key) + " in " + what +
+               (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
+               "; allowed: " + join(allowed),
+           e.key_node);
+    }
+  }
+
+  double number(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsScalar()) fail(what + ": expected a number", n);
+    double v = 0;
+    const std::string& text = n.Scalar();
+    std::istringstream in(text);
+    in >> v;
+    if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + in_quotes(text), n);
+    if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + in_quotes(text), n);
+    return v;
+  }
+  double positive(const YAML::Node& n, const std::string& what) const {
+    const double v = number(n, what);
+    if (!(v > 0)) fail(what + ": expected a number > 0, got " + fmt(v), n);
+    return v;
+  }
+
+  // Per-joint factors from a `bones:` or `lengths:` map, with `fallback` for unmatched joints.
+  Eigen::VectorXd factors(const YAML::Node& map, bool lengths, double fallback, const std::string& what,
+                          std::vector<std::string>& notes) const {
+    const int n = source_.joint_count();
+    Eigen::VectorXd f = Eigen::VectorXd::Constant(n, fallback);
+    std::vector<int> owner(static_cast<std::size_t>(n), -1);  // which pattern set the joint
+    const std::vector<Entry> es = entries(map, what);
+    if (es.empty())
+      fail(what + " is empty (expected joint-name patterns: " + (lengths ? "length" : "factor") + ")", map);
+    for (std::size_t p = 0; p < es.size(); ++p) {
+      const Entry& e = es[p];
+      std::regex re;
+      try {
+        re = std::regex(e.key, std::regex::ECMAScript);
+      } catch (const std::regex_error& err) {
+        fail("bad regular expression " + in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+      }
+      const double v = positive(e.value, what + "." + e.key);
+      std::vector<std::string> matched, shadowed;
+      for (int j = 0; j < n; ++j) {
+        const std::string& name = source_.joint(j).name;
+        if (!std::regex_match(name, re)) continue;
+        if (owner[static_cast<std::size_t>(j)] >= 0) {
+          shadowed.push_back(name);
+          continue;
+        }
+        if (lengths) {
+          const double len = source_.joint(j).offset.norm();
+          if (!(len > 0))
+            fail(what + "." + e.key + ": joint " + in_quotes(name) +
+                     " has a zero offset from its parent in the source, so no length can be set for it",
+                 e.key_node);
+          f[j] = v / len;
+        } else {
+          f[j] = v;
+        }
+        owner[static_cast<std::size_t>(j)] = static_cast<int>(p);
+        matched.push_back(name);
+      }
+      if (matched.empty() && shadowed.empty())
+        fail("pattern " + in_quotes(e.key) + " in " + what + " matches no joint (the whole name must match)",
+             e.key_node);
+      std::string note = what + " " + in_quotes(e.key) + " = " + fmt(v) + ": " +
+                         (matched.empty() ? std::string("no joint left") : join(matched));
+      if (!shadowed.empty()) note += " (already matched earlier: " + join(shadowed) + ")";
+      notes.push_back(note);
+    }
+    return f;
+  }
+
+  LoadedTarget read(std::string_view text, std::shared_ptr<const Skeleton> source_ptr) const {
+    YAML::Node root;
+    try {
+      root = YAML::Load(std::string(text));
+    } catch (const YAML::Exception& e) {
+      const YAML::Mark m = e.mark;
+      throw Error("malformed YAML: " + e.msg,
+                  m.line < 0 ? SourceLocation{path_} : SourceLocation{path_, m.line + 1, m.column + 1});
+    }
+    if (!root.IsDefined() || root.IsNull())
+      throw Error("empty target file (expected version: 1 and one of bones, lengths, morph)", {path_, 1, 1});
+    const std::vector<Entry> top = entries(root, "the target file");
+    check_keys(top, "the target file", {"version", "default", "bones", "lengths", "morph"});
+    auto find = [&](const std::string& key) -> const Entry* {
+      for (const Entry& e : top)
+        if (e.key == key) return &e;
+      return nullptr;
+    };
+    const Entry* version = find("version");
+    if (version == nullptr) throw Error("missing 'version: 1'", {path_, 1, 1});
+    if (!version->value.IsScalar() || version->value.Scalar() != "1")
+      fail("unsupported version " + in_quotes(version->value.IsScalar() ? version->value.Scalar() : "?") +
+               " (expected 1)",
+           version->value);
+    const Entry* def = find("default");
+    const double fallback = def != nullptr ? positive(def->value, "default") : 1.0;
+    const Entry* bones = find("bones");
+    const Entry* lengths = find("lengths");
+    const Entry* morph = find("morph");
+    const int given = (bones != nullptr) + (lengths != nullptr) + (morph != nullptr);
+    if (given != 1) {
+      const YAML::Node& where =
+          given == 0 ? version->key_node : (morph != nullptr ? morph->key_node : lengths->key_node);
+      fail(given == 0 ? "expected one of 'bones', 'lengths' or 'morph'"
+                      : "give only one of 'bones', 'lengths' and 'morph'",
+           where);
+    }
+    LoadedTarget out;
+    if (bones != nullptr || lengths != nullptr) {
+      const bool is_lengths = lengths != nullptr;
+      const Entry& e = is_lengths ? *lengths : *bones;
+      out.kind = e.key;
+      Eigen::VectorXd f = factors(e.value, is_lengths, fallback, e.key, out.notes);
+      out.target = factor_target(std::move(source_ptr), f);
+      return out;
+    }
+    out.kind = "morph";
+    if (!morph->value.IsSequence() || morph->value.size() == 0)
+      fail("morph must be a list of keys ({time: seconds, scale: factor} or time with bones/lengths)",
+           morph->value);
+    std::vector<double> times;
+    std::vector<Eigen::VectorXd> keys;
+    for (std::size_t k = 0; k < morph->value.size(); ++k) {
+      const YAML::Node key = morph->value[k];
+      const std::string what = "morph[" + std::to_string(k) + "]";
+      const std::vector<Entry> es = entries(key, what);
+      check_keys(es, what, {"time", "scale", "bones", "lengths", "default"});
+      const Entry *time = nullptr, *scale = nullptr, *kb = nullptr, *kl = nullptr, *kd = nullptr;
+      for (const Entry& e : es) {
+        if (e.key == "time") time = &e;
+        if (e.key == "scale") scale = &e;
+        if (e.key == "bones") kb = &e;
+        if (e.key == "lengths") kl = &e;
+        if (e.key == "default") kd = &e;
+      }
+      if (time == nullptr) fail(what + ": missing 'time' (seconds)", key);
+      const double t = number(time->value, what + ".time");
+      if (t < 0) fail(what + ".time: expected seconds >= 0, got " + fmt(t), time->value);
+      if (!times.empty() && !(t > times.back()))
+        fail(what + ".time: key times must increase strictly, " + fmt(t) + " s follows " + fmt(times.back()) +
+                 " s",
+             time->value);
+      const int forms = (scale != nullptr) + (kb != nullptr) + (kl != nullptr);
+      if (forms != 1) fail(what + ": expected exactly one of 'scale', 'bones' or 'lengths'", key);
+      if (kd != nullptr && scale != nullptr)
+        fail(what + ": 'default' goes with bones or lengths, not scale", kd->key_node);
+      Eigen::VectorXd f;
+      if (scale != nullptr) {
+        f = Eigen::VectorXd::Constant(source_.joint_count(), positive(scale->value, what + ".scale"));
+      } else {
+        const double key_default = kd != nullptr ? positive(kd->value, what + ".default") : fallback;
+        const Entry& e = kb != nullptr ? *kb : *kl;
+        f = factors(e.value, kl != nullptr, key_default, what + "." + e.key, out.notes);
+      }
+      times.push_back(t);
+      keys.push_back(std::move(f));
+    }
+    out.target = morph_target(std::move(source_ptr), std::move(times), std::move(keys));
+    return out;
+  }
+
+ private:
+  const Skeleton& source_;
+  std::string path_;
+};
+
+std::string lower_extension(const std::string& path) {
+  std::string ext = std::filesystem::path(path).extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return ext;
+}
+
+}  // namespace
+
+LoadedTarget parse_target_yaml(std::shared_ptr<const Skeleton> source, std::string_view text,
+                               const std::string& path) {
+  if (!source) throw std::invalid_argument("parse_target_yaml: no source skeleton");
+  const Reader reader(*source, path);
+  return reader.read(text, source);
+}
+
+LoadedTarget load_target(std::shared_ptr<const Skeleton> source, const std::string& path) {
+  if (!source) throw std::invalid_argument("load_target: no source skeleton");
+  const std::string ext = lower_extension(path);
+  if (ext == ".yaml" || ext == ".yml") {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open the target file", {path});
+    std::ostringstream text;
+    text << in.rdbuf();
+    return parse_target_yaml(std::move(source), text.str(), path);
+  }
+  LoadedTarget out;
+  out.kind = "skeleton";
+  const std::string what = "target skeleton " + path;
+  if (ext == ".bvh") {
+    io::ImportedMotion in = io::import_bvh(path, io::ImportOptions{});
+    out.notes = in.notes;
+    out.target = skeleton_target(std::move(source), *in.motion.skeleton, what, &out.notes);
+    return out;
+  }
+  if (ext == ".asf") {
+    const io::AsfSkeleton asf = io::read_asf(path);
+    motion::Motion rest{asf.skeleton, motion::FrameMatrix(0, asf.skeleton->channel_count()),
+                        io::kAmcDefaultFps, "rest"};
+    out.notes = io::apply_import_options(rest, io::ImportOptions{}, io::kAmcDefaultFps, path,
+                                         asf.declared_metres_per_unit().value_or(0.0));
+    out.target = skeleton_target(std::move(source), *rest.skeleton, what, &out.notes);
+    return out;
+  }
+  throw std::invalid_argument(
+      "target file " + path + ": unknown extension '" + ext +
+      "' (expected .yaml or .yml for factors, lengths or a morph, .bvh or .asf for a skeleton)");
+}
+
+}  // namespace kg::retarget

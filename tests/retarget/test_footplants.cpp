@@ -1,0 +1,267 @@
+// Footplant detection against the synthesizer's exact plants and on real clips; footplant
+// constraints in both flavours; the retarget.footplants node.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <sstream>
+
+#include "../support/node_context.hpp"
+#include "kg/builtin_nodes.hpp"
+#include "kg/io/asf_amc.hpp"
+#include "kg/retarget/constraint_io.hpp"
+#include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/footplants.hpp"
+#include "kg/synth/synthesize.hpp"
+
+using namespace kg;
+using namespace kg::retarget;
+
+namespace {
+
+// Detected plants of the point on (joint, local), in time order.
+std::vector<Footplant> plants_of(const FootplantDetection& d, int joint, const Eigen::Vector3d& local) {
+  std::vector<Footplant> out;
+  for (const Footplant& p : d.plants) {
+    const PointRef& r = d.points[static_cast<std::size_t>(p.point)].point;
+    if (r.joint == joint && (r.local - local).norm() < 1e-9) out.push_back(p);
+  }
+  return out;
+}
+
+std::string describe(const FootplantDetection& d) {
+  std::ostringstream out;
+  for (const Footplant& p : d.plants)
+    out << d.points[static_cast<std::size_t>(p.point)].name << " [" << p.first_frame << ", " << p.last_frame
+        << "] skate " << p.skate * 1000 << " mm\n";
+  return out.str();
+}
+
+// Compares detected plants of the ankle and toe-tip points with the synthesizer's, within
+// `tolerance` frames at each end.
+void compare_with_synthesizer(const synth::Synthesis& s, const FootplantDetection& d, int tolerance) {
+  int compared = 0;
+  for (const synth::FootPlant& truth_first : s.plants) {
+    if (truth_first.point != synth::FootPoint::Ankle && truth_first.point != synth::FootPoint::Toe) continue;
+    // Do each (side, point) once.
+    if (&truth_first != &*std::find_if(s.plants.begin(), s.plants.end(), [&](const synth::FootPlant& p) {
+          return p.side == truth_first.side && p.point == truth_first.point;
+        }))
+      continue;
+    std::vector<const synth::FootPlant*> truth;
+    for (const synth::FootPlant& p : s.plants)
+      if (p.side == truth_first.side && p.point == truth_first.point) truth.push_back(&p);
+    const std::vector<Footplant> found = plants_of(d, truth_first.joint, truth_first.local);
+    INFO(truth_first.name() << ": synthesizer " << truth.size() << " plants, detected " << found.size() << "\n"
+                            << describe(d));
+    REQUIRE(found.size() == truth.size());
+    for (std::size_t i = 0; i < truth.size(); ++i) {
+      INFO("plant " << i << ": synthesizer [" << truth[i]->first_frame << ", " << truth[i]->last_frame
+                    << "], detected [" << found[i].first_frame << ", " << found[i].last_frame << "]");
+      CHECK(std::abs(found[i].first_frame - truth[i]->first_frame) <= tolerance);
+      CHECK(std::abs(found[i].last_frame - truth[i]->last_frame) <= tolerance);
+      CHECK((found[i].mean - truth[i]->world).norm() < 0.01);
+    }
+    ++compared;
+  }
+  CHECK(compared == 4);  // ankle and toe tip of both feet
+}
+
+const std::string kData = KG_DATA_DIR;
+
+}  // namespace
+
+TEST_CASE("footplants of the synthesized walk match the synthesizer's plants") {
+  for (double fps : {120.0, 30.0}) {
+    INFO("fps " << fps);
+    const synth::Synthesis walk = synth::synthesize_walk({.steps = 6, .speed = 1.3, .stature = 1.75, .fps = fps});
+    const FootplantDetection d = detect_footplants(walk.motion, {});
+    REQUIRE(d.points.size() == 4);
+    CHECK(d.points[0].name == "LeftFoot");
+    CHECK(d.points[1].name == "LeftToeBase/end");
+    CHECK(d.points[3].name == "RightToeBase/end");
+    CHECK(d.floor == Approx(0).margin(1e-6));  // the synthesizer's floor is y = 0
+    // Within 0.1 s (3 frames at 30 Hz): a point leaving a plant accelerates from rest, so any
+    // threshold sees it go a little late.
+    compare_with_synthesizer(walk, d, static_cast<int>(std::lround(0.1 * fps)));
+    for (const Footplant& p : d.plants) CHECK(p.skate < 0.01);
+  }
+}
+
+TEST_CASE("footplant options: named points, given floor, thresholds, minimum duration, errors") {
+  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  FootplantOptions o;
+  o.points = {"LeftToeBase/end", "RightFoot"};
+  FootplantDetection d = detect_footplants(walk.motion, o);
+  REQUIRE(d.points.size() == 2);
+  CHECK(d.points[0].point.joint == walk.figure.toe[synth::kLeft]);
+  CHECK((d.points[0].point.local - walk.figure.toe_tip_local).norm() < 1e-12);
+  CHECK(d.points[1].point.joint == walk.figure.foot[synth::kRight]);
+  const int toe_plants = d.count(0);
+
+  // A heel: a point given in the foot's frame, compared with the synthesizer's heel plants.
+  std::ostringstream heel;
+  heel << "LeftFoot[" << walk.figure.heel_local.x() << " " << walk.figure.heel_local.y() << " "
+       << walk.figure.heel_local.z() << "]";
+  FootplantOptions h;
+  h.points = {heel.str()};
+  const FootplantDetection hd = detect_footplants(walk.motion, h);
+  REQUIRE(hd.points.size() == 1);
+  CHECK((hd.points[0].point.local - walk.figure.heel_local).norm() < 1e-5);
+  int heel_truth = 0;
+  for (const synth::FootPlant& p : walk.plants)
+    heel_truth += p.side == synth::kLeft && p.point == synth::FootPoint::Heel;
+  CHECK(hd.count(0) == heel_truth);
+  CHECK(toe_plants >= 2);
+
+  // A floor given below every point: each point's rest level stays its own, so the same plants.
+  o.floor = -1.0;
+  d = detect_footplants(walk.motion, o);
+  CHECK(d.floor == -1.0);
+  CHECK(d.count(0) == toe_plants);
+
+  // Thresholds nothing exceeds and no trimming: the whole clip is one plant per point.
+  o = {};
+  o.speed_threshold = 100;
+  o.height_threshold = 10;
+  o.trim_distance = 0;
+  d = detect_footplants(walk.motion, o);
+  REQUIRE(d.plants.size() == d.points.size());
+  CHECK(d.plants[0].first_frame == 0);
+  CHECK(d.plants[0].last_frame == walk.motion.frame_count() - 1);
+  // Trimming keeps each plant's core within trim_distance of its median position.
+  o.trim_distance = 0.05;
+  d = detect_footplants(walk.motion, o);
+  for (const Footplant& p : d.plants) CHECK(p.last_frame - p.first_frame + 1 < walk.motion.frame_count());
+  o = {};
+  o.min_duration_s = walk.motion.duration() + 1;
+  CHECK(detect_footplants(walk.motion, o).plants.empty());
+
+  o = {};
+  o.points = {"LeftToe"};
+  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("unknown joint 'LeftToe'") &&
+                                                          Catch::Contains("nearest: 'LeftToeBase'"));
+  o.points = {"LeftFoot[0 0.1]"};
+  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("expected Joint[x y z]"));
+  o.points = {"LeftFoot/end"};
+  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("has no End Site"));
+  o = {};
+  o.hysteresis = 0.5;
+  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("hysteresis"));
+  o = {};
+  o.height_threshold = 0;
+  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("thresholds must be positive"));
+
+  // A skeleton without recognisable feet.
+  auto sk = std::make_shared<motion::Skeleton>();
+  sk->add_joint({.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Yposition}}, .end_sites = {}});
+  motion::Motion blob{sk, motion::FrameMatrix::Zero(10, 1), 30.0, "blob"};
+  CHECK_THROWS_WITH(detect_footplants(blob, {}), Catch::Contains("no foot joint found"));
+}
+
+TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
+  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  const motion::Motion& m = walk.motion;
+  const FootplantDetection d = detect_footplants(m, {});
+  REQUIRE(!d.plants.empty());
+  const ConstraintKindTable kinds = ConstraintKindTable::builtin();
+
+  const ConstraintSet fixed = footplant_constraints(d, m.frame_count(), {.flavour = PlantFlavour::Fixed});
+  REQUIRE(fixed.constraints.size() == d.plants.size());
+  CHECK_NOTHROW(check_constraints(fixed, kinds));
+  CHECK(fixed.constraints[0].kind == "position");
+  CHECK(fixed.constraints[0].label == d.points[static_cast<std::size_t>(d.plants[0].point)].name + " plant 1");
+  CHECK(fixed.constraints[0].params.size() == 6);
+  CHECK(static_cast<int>(fixed.constraints[0].samples.size()) == d.plants[0].last_frame - d.plants[0].first_frame + 1);
+  // The source meets its own plants to within its skate (the synthesizer's are exact: < 1 cm
+  // since a detected plant may take in a frame of the roll).
+  const std::span<const motion::Motion> chars(&m, 1);
+  ViolationSummary v = summarize_violations(fixed, kinds, chars);
+  CHECK(v.find("position")->worst < 0.01);
+
+  const ConstraintSet floor =
+      footplant_constraints(d, m.frame_count(), {.flavour = PlantFlavour::Floor, .above_floor = true});
+  CHECK_NOTHROW(check_constraints(floor, kinds));
+  int positions = 0, skids = 0, regions = 0;
+  for (const Constraint& c : floor.constraints) {
+    if (c.kind == "position") {
+      ++positions;
+      CHECK(c.params == std::vector<double>{0, c.params[1], 0, 0, 1, 0});
+      CHECK(kinds.find("position")->rows(c) == 1);
+    } else if (c.kind == "same_place") {
+      ++skids;
+      CHECK(c.params == std::vector<double>{1, 0, 1});
+      CHECK(c.samples.front().frames[1] == c.samples.front().frames[0] + 1);
+    } else if (c.kind == "region") {
+      ++regions;
+      CHECK(static_cast<int>(c.samples.size()) == m.frame_count());
+      CHECK(c.params[1] == d.floor);
+    }
+  }
+  CHECK(positions == static_cast<int>(d.plants.size()));
+  CHECK(skids == static_cast<int>(d.plants.size()));  // every plant spans more than one frame
+  CHECK(regions == static_cast<int>(d.points.size()));
+  v = summarize_violations(floor, kinds, chars);
+  CHECK(v.find("same_place")->worst < 0.005);  // per-frame horizontal travel during plants
+  CHECK(v.find("region")->worst < 0.002);
+}
+
+TEST_CASE("footplants on real walks: plausible plant counts per foot") {
+  struct Clip {
+    std::string path, skeleton;
+  };
+  const std::vector<Clip> clips = {{kData + "/cmu/bvh_motionbuilder/16_15.bvh", ""},
+                                   {kData + "/cmu/asf_amc/07_05.amc", kData + "/cmu/asf_amc/07.asf"},
+                                   {kData + "/other_skeletons/games105/walk60.bvh", ""}};
+  int read = 0;
+  for (const Clip& clip : clips) {
+    if (!std::filesystem::exists(clip.path)) {
+      WARN("skipped: " << clip.path << " not found");
+      continue;
+    }
+    const motion::Motion m = io::import_motion(clip.path, clip.skeleton, io::ImportOptions{}).motion;
+    ++read;
+    const FootplantDetection d = detect_footplants(m, {});
+    INFO(clip.path << ": " << m.frame_count() << " frames at " << m.fps << " Hz\n" << describe(d));
+    for (const std::string& n : d.notes) INFO(n);
+    REQUIRE(d.points.size() >= 2);
+    // A walk plants each foot about once per stride (~1 s); allow 0.4 to 1.6 per second, at least 1.
+    for (std::size_t i = 0; i < d.points.size(); ++i) {
+      const int n = d.count(static_cast<int>(i));
+      INFO(d.points[i].name << ": " << n << " plants in " << m.duration() << " s");
+      CHECK(n >= 1);
+      CHECK(n <= std::max(2.0, 1.6 * m.duration()));
+      CHECK(n >= std::floor(0.4 * m.duration()));
+    }
+    for (const Footplant& p : d.plants) CHECK(p.skate < 0.05);
+  }
+  if (read == 0) WARN("skipped: no real clip found under " << kData);
+}
+
+TEST_CASE("retarget.footplants node") {
+  const graph::Registry registry = test::registry_of(retarget_constraint_node_types());
+  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  test::NodeContext ctx = test::run_node(
+      registry, "retarget.footplants",
+      test::params_for(registry, "retarget.footplants", {{"flavour", std::string("floor")}, {"above_floor", true}}),
+      {{"motion", graph::Value::make(walk.motion)}});
+  const ConstraintSet& set = ctx.outputs.at("constraints").get<ConstraintSet>();
+  CHECK(!set.constraints.empty());
+  CHECK(std::get<std::int64_t>(ctx.figures.at("plants.LeftToeBase/end")) >= 2);
+  CHECK(std::get<double>(ctx.figures.at("floor_m")) == Approx(0).margin(1e-6));
+  CHECK(ctx.logged("points (auto): LeftFoot, LeftToeBase/end, RightFoot, RightToeBase/end"));
+  CHECK(std::get<std::string>(ctx.figures.at("kinds")).find("same_place") != std::string::npos);
+
+  // Named points and a given floor; a bad floor text fails when the node is built.
+  ctx = test::run_node(registry, "retarget.footplants",
+                       test::params_for(registry, "retarget.footplants",
+                                        {{"points", std::string("LeftToeBase/end, RightToeBase/end")},
+                                         {"floor", std::string("0.0")}}),
+                       {{"motion", graph::Value::make(walk.motion)}});
+  CHECK(ctx.figures.count("plants.LeftFoot") == 0);
+  CHECK(std::get<double>(ctx.figures.at("floor_m")) == 0.0);
+  CHECK_THROWS_WITH(test::run_node(registry, "retarget.footplants",
+                                   test::params_for(registry, "retarget.footplants", {{"floor", std::string("low")}}),
+                                   {{"motion", graph::Value::make(walk.motion)}}),
+                    Catch::Contains("floor 'low'"));
+}
