@@ -504,16 +504,20 @@ std::vector<graph::Extension> builtin_constraint_kind_extensions() {
 }
 
 // ---- evaluation ------------------------------------------------------------------------------
-PoseCache::PoseCache(std::span<const motion::Motion> motions) : motions_(motions) {
+PoseCache::PoseCache(std::span<const motion::Motion> motions, std::span<const SkeletonAt> skeleton_at)
+    : motions_(motions) {
   world_.resize(motions.size());
   for (std::size_t c = 0; c < motions.size(); ++c) {
     const motion::Motion& m = motions[c];
     if (!m.skeleton) throw std::invalid_argument("pose cache: character " + std::to_string(c) + " has no skeleton");
     const int joints = m.skeleton->joint_count();
     world_[c].resize(static_cast<std::size_t>(m.frame_count()) * static_cast<std::size_t>(joints));
-    for (int f = 0; f < m.frame_count(); ++f)
-      motion::forward_kinematics(*m.skeleton, m.values.row(f),
+    const bool morphing = c < skeleton_at.size() && skeleton_at[c];
+    for (int f = 0; f < m.frame_count(); ++f) {
+      const std::shared_ptr<const motion::Skeleton> at_frame = morphing ? skeleton_at[c](f) : nullptr;
+      motion::forward_kinematics(at_frame ? *at_frame : *m.skeleton, m.values.row(f),
                                  std::span(world_[c]).subspan(static_cast<std::size_t>(f) * joints, joints));
+    }
   }
 }
 

@@ -136,10 +136,9 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
   return plants;
 }
 
-SkateSummary foot_skate(const ConstraintSet& set, const Motion& motion) {
+SkateSummary foot_skate(const ConstraintSet& set, const PoseCache& poses) {
   SkateSummary out;
   out.plants = find_plants(set);
-  const PoseCache poses(std::span<const Motion>(&motion, 1));
   for (PlantSkate& plant : out.plants) {
     const Eigen::Vector3d start = poses.point(plant.point, plant.first_frame);
     for (int f = plant.first_frame + 1; f <= plant.last_frame; ++f) {
@@ -288,7 +287,13 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
   out.motion_name = result.name;
   out.frames = result.frame_count();
   out.fps = result.fps;
-  const PoseCache poses(std::span<const Motion>(&result, 1));
+  PoseCache::SkeletonAt skeleton_at;
+  if (in.target && in.target->morphing()) {
+    const Target* target = in.target;
+    const double fps = result.fps;
+    skeleton_at = [target, fps](int frame) { return target->skeleton_at(frame / fps); };
+  }
+  const PoseCache poses(std::span<const Motion>(&result, 1), std::span<const PoseCache::SkeletonAt>(&skeleton_at, 1));
   const ViolationSummary summary = summarize_violations(*in.constraints, *in.kinds, poses, in.tolerance);
   for (const KindViolation& kv : summary.kinds) {
     KindMetrics km{kv, false};
@@ -299,7 +304,7 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
     if (km.in_metres) out.worst_violation_metres = std::max(out.worst_violation_metres, kv.worst);
     out.kinds.push_back(km);
   }
-  out.skate = foot_skate(*in.constraints, result);
+  out.skate = foot_skate(*in.constraints, poses);
   out.jerk = rms_jerk(result);
   if (in.source) {
     out.source_jerk = rms_jerk(*in.source);

@@ -30,6 +30,7 @@ class MetricsNode final : public graph::Node {
     in.kinds = &kinds;
     if (ctx.has_input("source")) in.source = &ctx.input<motion::Motion>("source");
     if (ctx.has_input("initial")) in.initial = &ctx.input<motion::Motion>("initial");
+    if (ctx.has_input("target")) in.target = &ctx.input<Target>("target");
     if (ctx.has_input("keys"))
       in.frames_per_key = ctx.input<KeySpacing>("keys").frames_per_key;
     else
@@ -89,6 +90,7 @@ graph::NodeType metrics_node_type() {
                  {"constraints", "kg.Constraints", true, "the constraints it should meet"},
                  {"source", "kg.Motion", false, "the motion before adaptation, on its own skeleton"},
                  {"initial", "kg.Motion", false, "the initial estimate the solver started from"},
+                 {"target", "kg.Target", false, "the target character: a morphing one gives each frame its skeleton"},
                  {"keys", "kg.KeySpacing", false, "the key spacing of the solve (else key_spacing)"},
                  {"solve_seconds", "kg.Scalar", false, "the solver's time, s, passed through"}},
       .outputs = {{"json", "kg.String", true, "the JSON document also written to path"}},

@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include <yaml-cpp/yaml.h>
 #include <catch2/catch.hpp>
 
 #include "../support/process.hpp"
@@ -87,6 +88,42 @@ TEST_CASE("graphs/demo.yaml runs on synthesized motion and writes readable clips
   CHECK(jump_30.frame_count() == kg::motion::resampled_frame_count(jump.frame_count(), 120, 30));
   CHECK(walk_smooth.frame_count() == walk.frame_count());
   CHECK(walk.skeleton->joint_count() == jump.skeleton->joint_count());
+
+  // The retargeting branch: the walk on a character of 0.6 times the size, its footplants met.
+  const auto small = kg::io::read_bvh(out / "walk_small_30hz.bvh").motion;
+  CHECK(small.frame_count() == walk_30.frame_count());
+  CHECK(small.skeleton->rest_height() == Approx(0.6 * walk_30.skeleton->rest_height()).epsilon(1e-6));
+  const YAML::Node metrics = YAML::LoadFile((out / "walk_small_metrics.json").string());
+  CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
+  CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+}
+
+TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legged and a morphing character",
+          "[graphs][data]") {
+  const std::vector<fs::path> clips{kData / "cmu/bvh_motionbuilder/16_15.bvh", kData / "cmu/asf_amc/07_05.amc"};
+  if (!fs::exists(clips[0]) || !fs::exists(clips[1])) {
+    WARN("skipped: 16_15.bvh or 07_05.amc not found in " << kData);
+    return;
+  }
+  TempDir out;
+  for (const fs::path& clip : clips) {
+    for (const std::string target : {"", "graphs/targets/short_legs_long_torso.yaml", "graphs/targets/morph_to_60.yaml"}) {
+      const fs::path output = out / "result.bvh", report = out / "metrics.json";
+      const Result r = kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
+                                  "--set", "target=" + (target.empty() ? "" : (kSource / target).string()), "--set",
+                                  "output=" + output.string(), "--set", "report=" + report.string()});
+      INFO(clip << " target " << target << "\n" << show(r));
+      REQUIRE(r.code == 0);
+      const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
+      const auto result = kg::io::read_bvh(output).motion;
+      CHECK(result.fps == Approx(30));
+      CHECK(result.frame_count() == kg::motion::resampled_frame_count(source.motion.frame_count(), source.motion.fps, 30));
+      // Equality constraints within 1 mm and no inequality violated by more (the issue's figure).
+      const YAML::Node metrics = YAML::LoadFile(report.string());
+      CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
+      CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+    }
+  }
 }
 
 TEST_CASE("graphs/convert.yaml converts every clip in ../shared/data", "[graphs][data]") {

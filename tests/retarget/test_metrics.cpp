@@ -115,7 +115,7 @@ TEST_CASE("metrics: foot skate is the greatest horizontal travel from the plant'
   set.constraints.push_back(skid);
   // A second run of the same point later on, still: no skate.
   set.constraints.push_back(on_foot("position", {0, 0, 0, 0, 1, 0}, 25, 25, "LeftHeel plant 2"));
-  const SkateSummary s = foot_skate(set, m);
+  const SkateSummary s = foot_skate(set, PoseCache(std::span<const Motion>(&m, 1)));
   REQUIRE(s.plants.size() == 2);
   CHECK(s.plants[0].label == "LeftHeel plant");
   CHECK(s.plants[0].first_frame == 10);

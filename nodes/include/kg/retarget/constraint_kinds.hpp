@@ -101,9 +101,12 @@ inline double row_violation(double residual, bool inequality) {
 // reference to `motions`, which must outlive the cache (not owned).
 class PoseCache {
  public:
+  // The skeleton of a character at a frame (a morphing target's); null keeps the motion's own.
+  using SkeletonAt = std::function<std::shared_ptr<const motion::Skeleton>(int frame)>;
   // motions[c] is character c's motion on the skeleton constraints are evaluated against (the
-  // target skeleton when measuring a retargeted result).
-  explicit PoseCache(std::span<const motion::Motion> motions);
+  // target skeleton when measuring a retargeted result); skeleton_at[c], when given and not
+  // null, replaces that skeleton frame by frame (morphing).
+  explicit PoseCache(std::span<const motion::Motion> motions, std::span<const SkeletonAt> skeleton_at = {});
   int character_count() const { return static_cast<int>(motions_.size()); }
   int frame_count(int character) const;
   // World position of `point` at `frame`; throws std::out_of_range naming the character, joint

@@ -57,6 +57,7 @@
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
+#include "kg/retarget/target.hpp"
 
 namespace kg::retarget {
 
@@ -79,7 +80,7 @@ struct SkateSummary {
 std::vector<PlantSkate> find_plants(const ConstraintSet& set);
 // Plants and their travel in `motion` (character 0); throws std::out_of_range for frames or
 // joints outside it.
-SkateSummary foot_skate(const ConstraintSet& set, const motion::Motion& motion);
+SkateSummary foot_skate(const ConstraintSet& set, const PoseCache& poses);
 
 // ---- jerk ----
 struct JerkFigures {
@@ -120,6 +121,7 @@ AddedEnergy energy_above_cutoff(const motion::Motion& result, const motion::Moti
 // ---- everything, and its JSON ----
 struct MetricsInputs {
   const motion::Motion* result = nullptr;      // required (character 0)
+  const Target* target = nullptr;              // optional: a morphing target gives each frame its skeleton
   const ConstraintSet* constraints = nullptr;  // required
   const ConstraintKindTable* kinds = nullptr;  // required: every kind the set names
   const motion::Motion* source = nullptr;      // optional: before adaptation, own skeleton
