@@ -20,6 +20,8 @@
 #include "kg/motion/resample.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/metrics.hpp"
+#include "kg/retarget/per_frame_ik.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -114,6 +116,20 @@ void run(const Case& c, const ConstraintKindTable& table, int repeats) {
   for (const KindViolation& k : v.kinds)
     std::printf("  %-16s rows %6d  worst %.4f mm  mean %.4f mm  violated(>1mm) %d\n", k.kind.c_str(), k.rows,
                 k.worst * 1000, k.mean * 1000, k.violated_rows);
+
+  // The smoothness figure: RMS jerk the adaptation adds, against the per-frame IK
+  // baseline (Gleicher 1998, 3.1) on the same constraints from the same initial estimate.
+  const PerFrameIkResult ik = solve_per_frame_ik(c.m1, c.set, problem.kinds);
+  const JerkFigures added_st = rms_jerk_of_displacement(r.motions[0], c.m1);
+  const JerkFigures added_ik = rms_jerk_of_displacement(ik.motion, c.m1);
+  const double increase_st = rms_jerk(r.motions[0]).rotation - rms_jerk(c.m1).rotation;
+  const double increase_ik = rms_jerk(ik.motion).rotation - rms_jerk(c.m1).rotation;
+  std::printf("  per-frame IK: %.1f ms, worst violation %.4f mm\n", ik.seconds * 1000, ik.worst_violation * 1000);
+  std::printf("  jerk of the added displacement (rotations): spacetime %.1f rad/s^3, per-frame IK %.1f rad/s^3: "
+              "ratio %.1f%% (target <= 20%%)\n",
+              added_st.rotation, added_ik.rotation, 100 * added_st.rotation / std::max(added_ik.rotation, 1e-12));
+  std::printf("  RMS jerk increase over the initial motion (rotations): spacetime %+.1f, per-frame IK %+.1f rad/s^3\n",
+              increase_st, increase_ik);
 }
 
 Case synth_case(int steps, double legs_factor, const char* name) {
