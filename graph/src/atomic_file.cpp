@@ -1,8 +1,15 @@
 #include "kg/graph/atomic_file.hpp"
 
+#include "kg/graph/error.hpp"
+
 #include <unistd.h>
 
 #include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <mutex>
+#include <set>
+#include <sstream>
 #include <exception>
 #include <fstream>
 #include <stdexcept>
@@ -14,6 +21,17 @@ namespace kg::graph {
 namespace fs = std::filesystem;
 
 namespace {
+
+// Every input file read by this process, by canonical path (and (device, inode) through
+// fs::equivalent when comparing), guarded for readers on several threads.
+struct InputFiles {
+  std::mutex mutex;
+  std::set<fs::path> paths;
+};
+InputFiles& input_files() {
+  static InputFiles files;
+  return files;
+}
 
 // Unique within the machine for this process's lifetime: several threads or processes may write
 // beside the same target at once.
@@ -35,9 +53,37 @@ void remove_quietly(const fs::path& p) {
 
 }  // namespace
 
+std::string read_input_file(const fs::path& path, const std::string& what) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error("no such " + what, {path.string()});
+  if (fs::is_directory(path, ec)) throw Error(what + " expected, got a directory", {path.string()});
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw Error("cannot read " + what, {path.string()});
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  files.paths.insert(ec ? path : canonical);
+  return std::move(text).str();
+}
+
+bool is_input_file(const fs::path& path) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  if (files.paths.count(ec ? path : canonical)) return true;
+  for (const fs::path& input : files.paths)  // hard links and other spellings of one file
+    if (fs::equivalent(input, path, ec)) return true;
+  return false;
+}
+
 void write_file_atomically(const fs::path& target, const std::function<void(std::ostream&)>& write) {
   const std::string what = "cannot write '" + target.string() + "'";
   if (target.empty() || !target.has_filename()) throw std::runtime_error(what + ": not a file name");
+  if (is_input_file(target)) throw std::runtime_error(what + ": it is an input of this run and is never overwritten");
 
   std::error_code ec;
   if (target.has_parent_path()) {

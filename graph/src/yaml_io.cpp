@@ -3,6 +3,8 @@
 // 0-based; ours are 1-based).
 #include "kg/graph/yaml_io.hpp"
 
+#include "kg/graph/atomic_file.hpp"
+
 #include <yaml-cpp/yaml.h>
 
 #include <algorithm>
@@ -828,17 +830,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
 }
 
 std::string read_text(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  std::error_code ec;
-  if (!in) {
-    const bool exists = fs::exists(file, ec);
-    throw Error(exists ? "cannot read the graph file" : "no such graph file", {file.string(), 0, 0});
-  }
-  if (fs::is_directory(file, ec)) throw Error("is a directory, not a graph file", {file.string(), 0, 0});
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw Error("error reading the graph file", {file.string(), 0, 0});
-  return ss.str();
+  return read_input_file(file, "graph file");
 }
 
 }  // namespace

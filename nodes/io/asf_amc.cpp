@@ -1,6 +1,8 @@
 // ASF and AMC parsers (see kg/io/asf_amc.hpp for the mapping onto skeleton.hpp).
 #include "kg/io/asf_amc.hpp"
 
+#include "kg/graph/atomic_file.hpp"
+
 #include <algorithm>
 #include <array>
 #include <cctype>
@@ -714,12 +716,7 @@ class AsfParser {
 };
 
 std::string read_text(const std::string& path, const char* what) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw graph::Error(std::string("cannot open ") + what + " file", {path, 0, 0});
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  if (in.bad()) throw graph::Error(std::string("cannot read ") + what + " file", {path, 0, 0});
-  return std::move(ss).str();
+  return graph::read_input_file(path, std::string(what) + " file");
 }
 
 bool is_integer(std::string_view t) {

@@ -15,6 +15,8 @@
 #include "kg/graph/error.hpp"
 #include "kg/io/bvh.hpp"
 
+#include "kg/graph/atomic_file.hpp"
+
 namespace kg::io {
 namespace {
 
@@ -448,16 +450,7 @@ BvhClip parse_bvh(std::string_view text, const std::string& file_name) {
 }
 
 BvhClip read_bvh(const std::filesystem::path& path) {
-  const std::string name = path.string();
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error(std::string("cannot open the file: ") + std::strerror(errno), SourceLocation{name});
-  in.seekg(0, std::ios::end);
-  const std::streamoff size = in.tellg();
-  if (size < 0) throw Error("cannot read the file (not a regular file?)", SourceLocation{name});
-  in.seekg(0, std::ios::beg);
-  std::string text(static_cast<std::size_t>(size), '\0');
-  if (!in.read(text.data(), size)) throw Error("cannot read the file", SourceLocation{name});
-  return parse_bvh(text, name);
+  return parse_bvh(graph::read_input_file(path, "BVH file"), path.string());
 }
 
 ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions& options) {

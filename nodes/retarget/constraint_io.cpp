@@ -2,6 +2,8 @@
 // error at file:line:column.
 #include "kg/retarget/constraint_io.hpp"
 
+#include "kg/graph/atomic_file.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cmath>
@@ -404,11 +406,7 @@ ConstraintSet read_constraints_string(const std::string& text, const std::string
 }
 
 ConstraintSet read_constraints_file(const std::string& path, std::span<const motion::Motion> characters) {
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot open the constraint file", {path, 0, 0});
-  std::ostringstream text;
-  text << in.rdbuf();
-  return read_constraints_string(text.str(), path, characters);
+  return read_constraints_string(graph::read_input_file(path, "constraint file"), path, characters);
 }
 
 ConstraintSet joint_limit_constraints(const motion::Skeleton& sk, int character, int frames) {

@@ -14,6 +14,7 @@
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 #include "kg/retarget/target.hpp"
+#include "kg/graph/atomic_file.hpp"
 
 namespace kg::retarget {
 
@@ -266,11 +267,7 @@ LoadedTarget load_target(std::shared_ptr<const Skeleton> source, const std::stri
   if (!source) throw std::invalid_argument("load_target: no source skeleton");
   const std::string ext = lower_extension(path);
   if (ext == ".yaml" || ext == ".yml") {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open the target file", {path});
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_target_yaml(std::move(source), text.str(), path);
+    return parse_target_yaml(std::move(source), graph::read_input_file(path, "target file"), path);
   }
   LoadedTarget out;
   out.kind = "skeleton";

@@ -332,3 +332,22 @@ TEST_CASE("write_file_atomically refuses a directory target and an unwritable pl
                     Catch::Contains("out.txt"));
   CHECK(temp_files_in(dir.path()).empty());
 }
+
+TEST_CASE("read_input_file reads whole files and protects them from every later write") {
+  TempDir dir;
+  const auto clip = dir.write("clip.txt", "frames 3\n");
+  CHECK(read_input_file(clip, "clip file") == "frames 3\n");
+  CHECK(is_input_file(clip));
+  CHECK(is_input_file(dir.path() / "." / "clip.txt"));  // another spelling of the same file
+  CHECK_THROWS_WITH(write_file_atomically(clip, [](std::ostream& os) { os << "oops"; }),
+                    Catch::Contains("clip.txt") && Catch::Contains("never overwritten"));
+  CHECK(read_file(clip) == "frames 3\n");
+
+  std::error_code ec;
+  std::filesystem::create_hard_link(clip, dir.path() / "link.txt", ec);
+  if (!ec) CHECK_THROWS(write_file_atomically(dir.path() / "link.txt", [](std::ostream& os) { os << "oops"; }));
+  CHECK_NOTHROW(write_file_atomically(dir.path() / "other.txt", [](std::ostream& os) { os << "fine"; }));
+
+  CHECK_THROWS_WITH(read_input_file(dir.path() / "absent.txt", "clip file"), Catch::Contains("absent.txt: no such clip file"));
+  CHECK_THROWS_WITH(read_input_file(dir.path(), "clip file"), Catch::Contains("clip file expected, got a directory"));
+}

@@ -193,3 +193,41 @@ TEST_CASE("graphs/convert.yaml never overwrites its input and refuses a malforme
   CHECK_THAT(broken.err, Catch::Contains("broken.bvh:4"));
   CHECK_FALSE(fs::exists(work / "never.bvh"));
 }
+
+TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itself, the report", "[graphs]") {
+  const fs::path asf = kData / "cmu/asf_amc/16.asf", amc = kData / "cmu/asf_amc/16_15.amc";
+  TempDir work;
+  fs::copy_file(kSource / "graphs/convert.yaml", work / "convert.yaml");
+  fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
+  const std::string graph_before = kg::test::read_file(work / "convert.yaml");
+  const std::string clip_before = kg::test::read_file(work / "clip.bvh");
+
+  // The graph file as the output: the export fails, the graph is intact.
+  Result r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
+                        "--set", "output=" + (work / "convert.yaml").string()});
+  INFO(show(r));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("never overwritten"));
+  CHECK(kg::test::read_file(work / "convert.yaml") == graph_before);
+
+  // The run's report written over its input clip is refused; the clip is intact.
+  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(), "--set",
+                 "output=" + (work / "out.bvh").string(), "--report", (work / "clip.bvh").string()});
+  INFO(show(r));
+  CHECK(r.code != 0);
+  CHECK(kg::test::read_file(work / "clip.bvh") == clip_before);
+
+  // An .amc whose skeleton is found by its name: the .asf is an input too.
+  if (!fs::exists(asf) || !fs::exists(amc)) {
+    WARN("skipped: the guessed-skeleton case needs " << asf << " and " << amc);
+    return;
+  }
+  fs::copy_file(asf, work / "16.asf");
+  fs::copy_file(amc, work / "16_15.amc");
+  const std::string asf_before = kg::test::read_file(work / "16.asf");
+  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "16_15.amc").string(), "--set",
+                 "output=" + (work / "16.asf").string()});
+  INFO(show(r));
+  CHECK(r.code == 1);
+  CHECK(kg::test::read_file(work / "16.asf") == asf_before);
+}

@@ -720,7 +720,7 @@ TEST_CASE("asf: malformed inputs fail with file:line and what was expected", "[i
                             Catch::Contains(c.message) && Catch::Contains("expected"));
   }
   CHECK_THROWS_WITH(kg::io::read_asf("/nonexistent/x.asf"),
-                    Catch::Contains("/nonexistent/x.asf: cannot open ASF file"));
+                    Catch::Contains("/nonexistent/x.asf: no such ASF file"));
 }
 
 TEST_CASE("amc: malformed inputs fail with file:line and what was expected", "[io][asf][errors]") {
@@ -763,7 +763,7 @@ TEST_CASE("amc: malformed inputs fail with file:line and what was expected", "[i
     CHECK_THAT(message, Catch::StartsWith("bad.amc:" + std::to_string(c.line)) &&
                             Catch::Contains(c.message) && Catch::Contains("expected"));
   }
-  CHECK_THROWS_WITH(kg::io::read_amc("/nonexistent/x.amc", asf), Catch::Contains("cannot open AMC file"));
+  CHECK_THROWS_WITH(kg::io::read_amc("/nonexistent/x.amc", asf), Catch::Contains("no such AMC file"));
 }
 
 TEST_CASE("asf/amc: every truncation of the real files fails cleanly or reads a prefix",

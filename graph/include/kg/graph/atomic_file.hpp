@@ -1,18 +1,30 @@
-// Writes a file so that readers see either the old content or the whole new content, never a
-// part: data goes to a temporary file beside the target, is flushed, then renamed over it.
+// Files of a run: inputs are read through read_input_file, outputs written through
+// write_file_atomically, so that readers see either the old content or the whole new content of
+// an output, never a part (data goes to a temporary file beside the target, is flushed, then
+// renamed over it), and no output ever replaces a file the process has read as an input (the
+// graph file, a clip, a skeleton found by guessing, ...), whatever path leads to it.
 //
+//   std::string text = read_input_file("walk.bvh", "BVH file");
 //   write_file_atomically("out/walk.bvh", [&](std::ostream& os) { write_bvh(os, motion); });
 #pragma once
 
 #include <filesystem>
 #include <functional>
 #include <ostream>
+#include <string>
 
 namespace kg::graph {
 
-// Creates missing parent directories. If `write` throws or the stream fails, the temporary
-// file is removed, the target is untouched, and the error propagates (std::runtime_error naming
-// the path). 
+// The whole content of `path`, which from now on this process refuses to overwrite. Throws Error
+// located at the file: "no such <what>", "<what> expected, got a directory", "cannot open <what>".
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
+
+// Whether `path` names a file read through read_input_file (by any path leading to it).
+bool is_input_file(const std::filesystem::path& path);
+
+// Creates missing parent directories. Refuses (std::runtime_error naming the path) a target that
+// is an input file. If `write` throws or the stream fails, the temporary file is removed, the
+// target is untouched, and the error propagates (std::runtime_error naming the path).
 void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write);
 
 }  // namespace kg::graph
