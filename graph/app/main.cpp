@@ -199,6 +199,8 @@ int dispatch(const Options& o, const char* argv0) {
       return kExitOk;
     }
     case Verb::Nodes:
+      // Every node type the user can reach: the shipped plugins too, which graphs name in `plugins:`.
+      for (const std::string& problem : host.loader.load_directory(host.search_dirs.back())) warn(problem);
       if (o.json) {
         print_nodes_json(std::cout, host.registry, host.loader.loaded());
       } else {

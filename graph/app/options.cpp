@@ -52,7 +52,8 @@ verbs:
             its downstream nodes are skipped, the other branches still run
   validate  check GRAPH (node types, ports, port types, params, variables) without running it
   nodes     list every node type: ports with types, params with types, defaults, ranges,
-            choices and docs, and where each type comes from
+            choices and docs, and where each type comes from (built-ins, the plugins shipped
+            in <prefix>/lib/kinegraph/plugins, and those of --plugin-dir and KINEGRAPH_PLUGIN_PATH)
   dot       print GRAPH as Graphviz, ports and their types on the edges:
             kinegraph dot GRAPH | dot -Tsvg > graph.svg
 
