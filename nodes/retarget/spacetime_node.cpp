@@ -86,6 +86,7 @@ class SpacetimeNode final : public Node {
     }
     if (result.motions.size() > 1) ctx.output("motion2", std::move(result.motions[1]));
     ctx.output("motion", std::move(result.motions[0]));
+    ctx.output("seconds", result.seconds);
   }
 
  private:
@@ -174,7 +175,8 @@ NodeType spacetime_type() {
       {"keys2", "kg.KeySpacing", false, "key spacing of the second character"},
       {"target2", "kg.Target", false, "the second target character (for morphing)"}};
   spec.outputs = {{"motion", "kg.Motion", true, "m1 + d on the initial motion's skeleton"},
-                  {"motion2", "kg.Motion", false, "the second character's result, when motion2 is connected"}};
+                  {"motion2", "kg.Motion", false, "the second character's result, when motion2 is connected"},
+                  {"seconds", "kg.Scalar", true, "wall time of the solve, s (for retarget.metrics)"}};
   spec.params = {
       param("epsilon", ParamType::Float, 1e-4,
             "damping weight of the change (x^T M x, M = squared reach of each channel's joint, 1 for translation)",

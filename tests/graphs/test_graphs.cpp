@@ -122,6 +122,7 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
       const YAML::Node metrics = YAML::LoadFile(report.string());
       CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
       CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+      CHECK(metrics["solve_seconds"].as<double>() > 0);
     }
   }
 }
