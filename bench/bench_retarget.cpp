@@ -1,7 +1,8 @@
 // Spacetime retargeting figures (issue 3): whole-solve time and worst violations of a walk
-// retargeted to 60% size with footplants, floor and joint limits, at ~112 frames and at ~1,000
-// frames, on the synthesized walk and (when present) CMU 07_05; and the banded Cholesky against
-// Eigen's sparse Cholesky on a normal matrix of the solve's shape. One thread.
+// retargeted to 60% size with shorter legs, footplants, floor and joint limits, at ~112 frames
+// and at ~1,000 frames, on the synthesized walk (exact plants) and (when present) the captured
+// walks CMU 16_15 and 07_05; the added jerk against the per-frame IK baseline; and the banded
+// Cholesky against Eigen's sparse Cholesky on a normal matrix of the solve's shape. One thread.
 //
 //   bench_retarget            (KG_SPACETIME_TRACE=1 prints every iteration)
 #include <algorithm>
@@ -20,6 +21,8 @@
 #include "kg/motion/resample.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/initial_estimate.hpp"
+#include "kg/retarget/target.hpp"
 #include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 #include "kg/retarget/spacetime.hpp"
@@ -108,7 +111,9 @@ void run(const Case& c, const ConstraintKindTable& table, int repeats) {
   std::printf("%s: %d frames, %d channels, %zu constraints, %d rows (%d active at the end), %d unknowns\n",
               c.name.c_str(), c.m1.frame_count(), c.m1.skeleton->channel_count(), c.set.constraints.size(),
               r.total_rows, r.active_rows, r.unknowns);
-  std::printf("  before: worst violation %.2f cm\n", v0.worst() * 100);
+  std::printf("  before: worst violation %.2f cm (", v0.worst() * 100);
+  for (const KindViolation& k : v0.kinds) std::printf(" %s %.2f", k.kind.c_str(), k.worst * 100);
+  std::printf(" )\n");
   std::printf("  solve: %.1f ms (best of %d), %d iterations, %d pass(es), bandwidth %d, %s\n", best * 1000, repeats,
               r.iterations, r.passes, r.bandwidth, r.message.c_str());
   // Checked independently with the constraint library's own evaluation of the result.
@@ -166,6 +171,31 @@ Case synth_case(int steps, double legs_factor, const char* name) {
   return c;
 }
 
+// A captured walk retargeted the way graphs/retarget.yaml does it: footplants detected on the
+// source (floor flavour, heights moved onto the target) with the floor, joint limits from the
+// source's range widened by 10 degrees, moved onto a 60% target whose thighs and shanks are 51%
+// (joints named as in CMU skeletons: the tibia and foot joints' offsets are thigh and shank),
+// and the initial estimate of §3.8 as m1.
+Case cmu_case(const motion::Motion& src, const char* name) {
+  Eigen::VectorXd factors = Eigen::VectorXd::Constant(src.skeleton->joint_count(), 0.6);
+  for (const char* leg : {"ltibia", "lfoot", "rtibia", "rfoot"}) factors[src.skeleton->find_joint(leg)] = 0.6 * 0.85;
+  const Target target = factor_target(src.skeleton, factors);
+  const FootplantDetection d = detect_footplants(src, {});
+  PlantConstraintOptions plant_options{.flavour = PlantFlavour::Floor, .above_floor = true};
+  for (int f = 0; f < src.frame_count(); ++f) plant_options.height_scale.push_back(target.overall_scale(f / src.fps));
+  ConstraintSet set = footplant_constraints(d, src.frame_count(), plant_options);
+  add_joint_limits(set, src);
+  const ConstraintSet on_target = constraints_on_target(set, target);
+  const ConstraintKindTable table = ConstraintKindTable::builtin();
+  const KindFinder finder = [&](const std::string& k) { return table.find(k); };
+  Case c;
+  c.name = name;
+  c.m1 = initial_estimate(src, target, &on_target, finder).motion;
+  c.set = on_target;
+  std::printf("  %s: %zu plants detected\n", name, d.plants.size());
+  return c;
+}
+
 // Eigen's SimplicialLLT against the banded Cholesky on a random SPD matrix of the solve's shape.
 void compare_linear_algebra(int n, int b) {
   std::mt19937 rng(1);
@@ -213,27 +243,24 @@ int main() {
   run(synth_case(5, 1.0, "synth walk 60% uniform (m1 already exact)"), table, 5);
   run(synth_case(56, 0.85, "synth walk 60%, short legs, long"), table, 2);
 
+  const std::string walk_16_15 = std::string(KG_DATA_DIR) + "/cmu/bvh_motionbuilder/16_15.bvh";
+  if (std::filesystem::exists(walk_16_15)) {
+    std::printf("== CMU 16_15 (walk, MotionBuilder BVH) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor "
+                "plants, floor, joint limits; the library's initial estimate ==\n");
+    const motion::Motion src = motion::resample(io::import_motion(walk_16_15, "", {}).motion, 30.0);
+    run(cmu_case(src, "16_15 60%, short legs"), table, 5);
+  } else {
+    std::printf("skipped CMU 16_15: %s not found\n", walk_16_15.c_str());
+  }
   const std::string asf = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07.asf";
   const std::string amc = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07_05.amc";
   if (std::filesystem::exists(asf) && std::filesystem::exists(amc)) {
-    std::printf("== CMU 07_05 (slow walk) at 30 Hz to 60%%: detected fixed plants, floor, joint limits ==\n");
+    std::printf("== CMU 07_05 (slow walk) at 30 Hz to 60%% (thighs and shanks 51%%): detected fixed plants, floor, "
+                "joint limits; the library's initial estimate ==\n");
     io::ImportedMotion in = io::import_motion(amc, asf, {});
     const motion::Motion src = motion::resample(in.motion, 30.0);
-    const FootplantDetection d = detect_footplants(src, {});
-    ConstraintSet set = footplant_constraints(d, src.frame_count(), {.flavour = PlantFlavour::Fixed, .above_floor = true});
-    Case c;
-    c.name = "07_05 60%";
-    c.m1 = {scaled(*src.skeleton, 0.6), src.values, src.fps, "07_05"};
-    const int root = src.skeleton->joint(0).first_channel;
-    for (std::size_t k = 0; k < src.skeleton->joint(0).channels.size(); ++k)
-      if (!motion::is_rotation(src.skeleton->joint(0).channels[k].kind)) c.m1.values.col(root + static_cast<int>(k)) *= 0.6;
-    c.set = scaled(set, 0.6);
-    add_joint_limits(c.set, src);
-    std::printf("  %zu plants detected\n", d.plants.size());
-    run(c, table, 5);
+    run(cmu_case(src, "07_05 60%, short legs"), table, 5);
     // 1,000 frames: the clip played forwards then backwards, repeated (a continuous motion).
-    Case l = c;
-    l.name = "07_05 60%, ~1000 frames (ping-pong)";
     const int n = src.frame_count();
     const int frames = 1000;
     motion::Motion tiled{src.skeleton, motion::FrameMatrix(frames, src.values.cols()), 30, "07_05x"};
@@ -242,13 +269,7 @@ int main() {
       const int p = f % period;
       tiled.values.row(f) = src.values.row(p < n ? p : period - p);
     }
-    const FootplantDetection dl = detect_footplants(tiled, {});
-    l.m1 = {c.m1.skeleton, tiled.values, 30, "07_05x"};
-    for (std::size_t k = 0; k < src.skeleton->joint(0).channels.size(); ++k)
-      if (!motion::is_rotation(src.skeleton->joint(0).channels[k].kind)) l.m1.values.col(root + static_cast<int>(k)) *= 0.6;
-    l.set = scaled(footplant_constraints(dl, frames, {.flavour = PlantFlavour::Fixed, .above_floor = true}), 0.6);
-    add_joint_limits(l.set, tiled);
-    run(l, table, 2);
+    run(cmu_case(tiled, "07_05 60%, short legs, ~1000 frames (ping-pong)"), table, 2);
   } else {
     std::printf("skipped CMU 07_05: %s not found\n", amc.c_str());
   }

@@ -9,6 +9,7 @@
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/target.hpp"
 
 namespace kg {
 
@@ -108,7 +109,13 @@ class FootplantsNode final : public Node {
     double skate = 0;
     for (const retarget::Footplant& p : d.plants) skate = std::max(skate, p.skate);
     ctx.report("source_skate_max_m", skate);
-    retarget::ConstraintSet set = retarget::footplant_constraints(d, m.frame_count(), make_);
+    retarget::PlantConstraintOptions make = make_;
+    if (ctx.has_input("target")) {
+      const retarget::Target& target = ctx.input<retarget::Target>("target");
+      for (int f = 0; f < m.frame_count(); ++f) make.height_scale.push_back(target.overall_scale(f / m.fps));
+      ctx.report("height_scale", make.height_scale.empty() ? 1.0 : make.height_scale.front());
+    }
+    retarget::ConstraintSet set = retarget::footplant_constraints(d, m.frame_count(), make);
     report_set(ctx, set);
     ctx.output("constraints", std::move(set));
   }
@@ -125,8 +132,13 @@ NodeType footplants_type() {
       "Detects footplants (Gleicher 1998 §3.5): spans where a foot point is near the floor and nearly still "
       "(height and horizontal-speed thresholds with hysteresis, a minimum duration), and emits them as "
       "constraints: fixed (the plant's mean position, all axes) or floor (its height only, plus non-skid "
-      "same_place between consecutive frames: the solver may move the plant).";
-  spec.inputs = {{"motion", "kg.Motion", true, "the source clip the plants are read from"}};
+      "same_place between consecutive frames: the solver may move the plant). With above_floor, every foot point "
+      "stays above the floor (an estimated floor never lifts a point above where the source had it). With a "
+      "target connected, heights above the floor are scaled to its size.";
+  spec.inputs = {{"motion", "kg.Motion", true, "the source clip the plants are read from"},
+                 {"target", "kg.Target", false,
+                  "the character the plants are for: heights above the floor scale with its overall size (a smaller "
+                  "foot rests lower); horizontal positions stay the source's"}};
   spec.outputs = {kConstraintsOut};
   ParamSpec flavour = param("flavour", ParamType::Enum, std::string("fixed"),
                             "fixed: plant positions kept; floor: height plus non-skid only");

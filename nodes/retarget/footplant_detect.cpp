@@ -169,10 +169,14 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
     note << "floor (estimated, " << o.floor_percentile * 100 << "th percentile of the lowest point): " << d.floor
          << " m";
     d.notes.push_back(note.str());
+    d.floor_estimated = true;
   } else {
     d.floor = o.floor;
   }
-  for (std::size_t i = 0; i < np; ++i) d.points[i].rest_height = rest[i];
+  for (std::size_t i = 0; i < np; ++i) {
+    d.points[i].rest_height = rest[i];
+    d.points[i].heights = heights[i];
+  }
   if (frames < 2) return d;
 
   const int k = std::max(1, static_cast<int>(std::lround(m.fps / 60.0)));
@@ -246,6 +250,26 @@ const char* to_string(PlantFlavour flavour) {
 
 ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, const PlantConstraintOptions& o) {
   if (!(o.weight > 0)) throw std::invalid_argument("footplant constraints: weight must be positive");
+  if (!o.height_scale.empty()) {
+    if (static_cast<int>(o.height_scale.size()) != frames)
+      throw std::invalid_argument("footplant constraints: " + std::to_string(o.height_scale.size()) +
+                                  " height scales for " + std::to_string(frames) + " frames");
+    for (double s : o.height_scale)
+      if (!(s > 0) || !std::isfinite(s)) throw std::invalid_argument("footplant constraints: height scales must be positive");
+  }
+  auto scale_at = [&](int f) { return o.height_scale.empty() ? 1.0 : o.height_scale[static_cast<std::size_t>(f)]; };
+  auto on_target = [&](double height, int f) { return d.floor + scale_at(f) * (height - d.floor); };
+  // A constraint whose target moves over its samples gets per-sample params, else one set.
+  auto set_params = [](Constraint& c, std::vector<std::vector<double>> per_sample) {
+    const bool constant = std::all_of(per_sample.begin(), per_sample.end(), [&](const auto& p) { return p == per_sample.front(); });
+    if (constant && !per_sample.empty()) {
+      c.params = per_sample.front();
+      return;
+    }
+    c.params = per_sample.empty() ? std::vector<double>{} : per_sample.front();
+    for (std::size_t i = 0; i < per_sample.size(); ++i) c.samples[i].params = std::move(per_sample[i]);
+  };
+
   ConstraintSet set;
   std::vector<int> numbers(d.points.size(), 0);
   for (const Footplant& p : d.plants) {
@@ -256,11 +280,16 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
     pos.label = label;
     pos.points = {pt.point};
     pos.weight = o.weight;
-    if (o.flavour == PlantFlavour::Fixed)
-      pos.params = {p.mean.x(), p.mean.y(), p.mean.z(), 1, 1, 1};
-    else
-      pos.params = {0, p.mean.y(), 0, 0, 1, 0};
-    for (int f = p.first_frame; f <= p.last_frame; ++f) pos.samples.push_back({.frames = {f}});
+    std::vector<std::vector<double>> targets;
+    for (int f = p.first_frame; f <= p.last_frame; ++f) {
+      pos.samples.push_back({.frames = {f}});
+      const double y = on_target(p.mean.y(), f);
+      if (o.flavour == PlantFlavour::Fixed)
+        targets.push_back({p.mean.x(), y, p.mean.z(), 1, 1, 1});
+      else
+        targets.push_back({0, y, 0, 0, 1, 0});
+    }
+    set_params(pos, std::move(targets));
     set.constraints.push_back(std::move(pos));
     if (o.flavour == PlantFlavour::Floor && p.last_frame > p.first_frame) {
       Constraint skid;
@@ -279,9 +308,16 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
       above.kind = "region";
       above.label = pt.name + " above floor";
       above.points = {pt.point};
-      above.params = {-kInf, d.floor, -kInf, kInf, kInf, kInf};
       above.weight = o.weight;
-      for (int f = 0; f < frames; ++f) above.samples.push_back({.frames = {f}});
+      std::vector<std::vector<double>> bounds;
+      for (int f = 0; f < frames; ++f) {
+        above.samples.push_back({.frames = {f}});
+        double low = d.floor;
+        if (d.floor_estimated && f < static_cast<int>(pt.heights.size()))
+          low = std::min(low, on_target(pt.heights[static_cast<std::size_t>(f)], f));
+        bounds.push_back({-kInf, low, -kInf, kInf, kInf, kInf});
+      }
+      set_params(above, std::move(bounds));
       set.constraints.push_back(std::move(above));
     }
   return set;

@@ -12,6 +12,7 @@
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/target.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;
@@ -206,6 +207,84 @@ TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
   CHECK(v.find("region")->worst < 0.002);
 }
 
+TEST_CASE("footplant constraints on a target: heights above the floor scale, the source's floor is kept") {
+  const ConstraintKindTable kinds = ConstraintKindTable::builtin();
+  synth::Synthesis walk = synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
+  motion::Motion& m = walk.motion;
+  // Lift the root by 5 cm: the floor is now at 0.05, a level the footplants must find and keep.
+  const int root_y = 1;
+  m.values.col(root_y).array() += 0.05;
+  // And sink the first three frames by a further 4 cm: a captured floor that slopes away under
+  // the estimate.
+  m.values.block(0, root_y, 3, 1).array() -= 0.04;
+  const FootplantDetection d = detect_footplants(m, {});
+  REQUIRE(d.floor_estimated);
+  REQUIRE(!d.plants.empty());
+  const int frames = m.frame_count();
+
+  SECTION("heights above the floor scale per frame, horizontal positions stay") {
+    std::vector<double> scale(static_cast<std::size_t>(frames));
+    for (int f = 0; f < frames; ++f) scale[static_cast<std::size_t>(f)] = 1.0 - 0.4 * f / (frames - 1.0);  // a morph
+    const ConstraintSet fixed = footplant_constraints(d, frames, {.flavour = PlantFlavour::Fixed, .height_scale = scale});
+    CHECK_NOTHROW(check_constraints(fixed, kinds));
+    for (const Constraint& c : fixed.constraints) {
+      const Footplant& p = d.plants[static_cast<std::size_t>(&c - fixed.constraints.data())];
+      REQUIRE(c.kind == "position");
+      for (const Sample& s : c.samples) {
+        const std::vector<double>& params = s.params.empty() ? c.params : s.params;
+        const double sf = scale[static_cast<std::size_t>(s.frames[0])];
+        CHECK(params[0] == p.mean.x());
+        CHECK(params[2] == p.mean.z());
+        CHECK(params[1] == Approx(d.floor + sf * (p.mean.y() - d.floor)).margin(1e-12));
+      }
+    }
+    // A constant scale gives one set of params per plant.
+    const ConstraintSet uniform = footplant_constraints(
+        d, frames, {.flavour = PlantFlavour::Floor, .height_scale = std::vector<double>(static_cast<std::size_t>(frames), 0.6)});
+    for (const Constraint& c : uniform.constraints)
+      if (c.kind == "position")
+        for (const Sample& s : c.samples) CHECK(s.params.empty());
+  }
+
+  SECTION("an estimated floor never lifts a point above its source height; a given floor holds everywhere") {
+    const ConstraintSet set = footplant_constraints(d, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
+    const std::span<const motion::Motion> chars(&m, 1);
+    const ViolationSummary v = summarize_violations(set, kinds, chars);
+    CHECK(v.find("region")->worst == 0.0);
+    int lowered = 0;
+    for (const Constraint& c : set.constraints)
+      if (c.kind == "region")
+        for (const Sample& s : c.samples) {
+          const std::vector<double>& params = s.params.empty() ? c.params : s.params;
+          CHECK(params[1] <= d.floor);
+          if (params[1] < d.floor - 0.01) {
+            ++lowered;
+            CHECK(s.frames[0] < 3);
+          }
+        }
+    CHECK(lowered >= 2);  // at least the two ankles in the sunk frames
+
+    FootplantOptions given;
+    given.floor = d.floor;
+    const FootplantDetection dg = detect_footplants(m, given);
+    CHECK(!dg.floor_estimated);
+    const ConstraintSet level = footplant_constraints(dg, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
+    for (const Constraint& c : level.constraints)
+      if (c.kind == "region") {
+        CHECK(c.params[1] == d.floor);
+        for (const Sample& s : c.samples) CHECK(s.params.empty());
+      }
+    CHECK(summarize_violations(level, kinds, chars).find("region")->worst > 0.02);
+  }
+
+  SECTION("height scales of the wrong length or sign are refused") {
+    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = {0.6}}), Catch::Contains("height scales for"));
+    CHECK_THROWS_WITH(
+        footplant_constraints(d, frames, {.height_scale = std::vector<double>(static_cast<std::size_t>(frames), -1.0)}),
+        Catch::Contains("positive"));
+  }
+}
+
 TEST_CASE("footplants on real walks: plausible plant counts per foot") {
   struct Clip {
     std::string path, skeleton;
@@ -251,6 +330,23 @@ TEST_CASE("retarget.footplants node") {
   CHECK(std::get<double>(ctx.figures.at("floor_m")) == Approx(0).margin(1e-6));
   CHECK(ctx.logged("points (auto): LeftFoot, LeftToeBase/end, RightFoot, RightToeBase/end"));
   CHECK(std::get<std::string>(ctx.figures.at("kinds")).find("same_place") != std::string::npos);
+
+  // With a target connected, plant heights are the target's: a 60% figure's toe tip rests lower.
+  const ConstraintSet& source_set = set;
+  test::NodeContext small = test::run_node(
+      registry, "retarget.footplants", test::params_for(registry, "retarget.footplants", {}),
+      {{"motion", graph::Value::make(walk.motion)},
+       {"target", graph::Value::make(uniform_target(walk.motion.skeleton, 0.6))}});
+  const ConstraintSet& small_set = small.outputs.at("constraints").get<ConstraintSet>();
+  CHECK(std::get<double>(small.figures.at("height_scale")) == Approx(0.6));
+  REQUIRE(!small_set.constraints.empty());
+  const double floor = std::get<double>(small.figures.at("floor_m"));
+  for (const Constraint& c : small_set.constraints) {
+    const auto original = std::find_if(source_set.constraints.begin(), source_set.constraints.end(),
+                                       [&](const Constraint& o) { return o.label == c.label && o.kind == "position"; });
+    if (c.kind != "position" || original == source_set.constraints.end()) continue;
+    CHECK(c.params[1] - floor == Approx(0.6 * (original->params[1] - floor)).margin(1e-12));
+  }
 
   // Named points and a given floor; a bad floor text fails when the node is built.
   ctx = test::run_node(registry, "retarget.footplants",

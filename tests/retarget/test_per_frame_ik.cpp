@@ -277,8 +277,12 @@ TEST_CASE("per-frame IK on real walks scaled to 60 %", "[per_frame_ik]") {
                                               {.flavour = PlantFlavour::Floor, .above_floor = true});
     for (Constraint& c : set.constraints) {
       const std::size_t n = c.kind == "position" ? 3 : c.kind == "region" ? 6 : 0;
-      for (std::size_t i = 0; i < n && i < c.params.size(); ++i)
-        if (std::isfinite(c.params[i])) c.params[i] *= scale;
+      auto scale_about_origin = [&](std::vector<double>& params) {
+        for (std::size_t i = 0; i < n && i < params.size(); ++i)
+          if (std::isfinite(params[i])) params[i] *= scale;
+      };
+      scale_about_origin(c.params);
+      for (Sample& s : c.samples) scale_about_origin(s.params);
     }
     REQUIRE(!set.constraints.empty());
     const RetargetMetrics before =

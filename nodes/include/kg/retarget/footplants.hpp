@@ -52,6 +52,7 @@ struct PlantPoint {
   std::string name;  // "LeftToeBase/end", "LeftFoot"
   PointRef point;
   double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest level)
+  std::vector<double> heights{};  // m, world: its height at every frame of the motion
 };
 
 struct Footplant {
@@ -66,6 +67,7 @@ struct FootplantDetection {
   std::vector<PlantPoint> points;
   std::vector<Footplant> plants;  // ordered by point, then time
   double floor = 0;               // m, world height of the floor (given or estimated)
+  bool floor_estimated = false;   // floor was not given
   std::vector<std::string> notes; // which points were chosen, floor estimate
   int count(int point) const;     // plants of one point
 };
@@ -84,8 +86,17 @@ const char* to_string(PlantFlavour flavour);  // "fixed", "floor"
 struct PlantConstraintOptions {
   PlantFlavour flavour = PlantFlavour::Fixed;
   // Also a region constraint keeping every detected point at or above the floor at every frame.
+  // With an estimated floor, a frame whose source point lies below that estimate (captured
+  // floors slope by centimetres) bounds the point at its own source height instead: the source's
+  // contact with its floor is kept, never lifted to a level plane it did not walk on.
   bool above_floor = false;
   double weight = 1.0;
+  // Moving the plants onto a character of another size: at frame f a point's height above the
+  // floor is multiplied by height_scale[f] (the target's overall scale: a smaller foot rests
+  // lower on the floor), for plant heights and the source-height floor bounds alike. Horizontal
+  // plant positions stay where the source had them (the paper's fixed footprints). frames
+  // entries, each > 0; empty: 1.
+  std::vector<double> height_scale{};
 };
 
 // Constraints labelled "<point> plant <n>" (n from 1 per point) and "<point> above floor".
