@@ -9,6 +9,7 @@
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/holds.hpp"
 #include "kg/retarget/target.hpp"
 
 namespace kg {
@@ -94,6 +95,7 @@ class FootplantsNode final : public Node {
     detect_.trim_distance = p.get<double>("trim_distance");
     detect_.rest_window_s = p.get<double>("rest_window_s");
     detect_.floor = parse_floor(p.get<std::string>("floor"));
+    detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor : retarget::PlantFlavour::Fixed;
     make_.above_floor = p.get<bool>("above_floor");
   }
@@ -161,6 +163,8 @@ NodeType footplants_type() {
       param("floor", ParamType::String, std::string("auto"),
             "floor height in metres, or 'auto' (a low percentile of the lowest foot point's heights)"),
       param("above_floor", ParamType::Bool, false, "also keep every foot point above the floor at every frame"),
+      param("character", ParamType::Int, std::int64_t{0},
+            "which character of the solve the plants belong to (0 first, 1 second: motion2)", 0.0, 1.0),
   };
   return {spec, [](const Params& p) { return std::make_unique<FootplantsNode>(p); }};
 }
@@ -173,10 +177,11 @@ class ConstraintsNode final : public Node {
 
   void run(RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
+    std::vector<motion::Motion> characters{m};
+    if (ctx.has_input("motion2")) characters.push_back(ctx.input<motion::Motion>("motion2"));
     retarget::ConstraintSet set;
     if (ctx.has_input("constraints")) set = ctx.input<retarget::ConstraintSet>("constraints");
-    if (!path_.empty())
-      retarget::merge_constraints(set, retarget::read_constraints_file(path_, std::span(&m, 1)));
+    if (!path_.empty()) retarget::merge_constraints(set, retarget::read_constraints_file(path_, characters));
     if (joint_limits_) {
       const retarget::ConstraintSet limits = retarget::joint_limit_constraints(*m.skeleton, 0, m.frame_count());
       ctx.report("joint_limits", static_cast<std::int64_t>(limits.constraints.size()));
@@ -200,7 +205,8 @@ NodeType constraints_type() {
       "joint limits by regular expression; see kg/retarget/constraint_io.hpp), adds the skeleton's own "
       "channel limits (ASF limits) if asked, and merges them with the constraints on the input.";
   spec.inputs = {{"motion", "kg.Motion", true, "the clip whose skeleton resolves joint names and bounds frames"},
-                 {"constraints", "kg.Constraints", false, "constraints to merge with (e.g. footplants)"}};
+                 {"constraints", "kg.Constraints", false, "constraints to merge with (e.g. footplants)"},
+                 {"motion2", "kg.Motion", false, "the second character's clip, for points with `character: 1`"}};
   spec.outputs = {kConstraintsOut};
   spec.params = {
       param("path", ParamType::InputPath, std::string(), "the constraint YAML file; empty: none"),
@@ -208,6 +214,60 @@ NodeType constraints_type() {
             "add a parameter_range constraint per limited channel of the skeleton, every frame"),
   };
   return {spec, [](const Params& p) { return std::make_unique<ConstraintsNode>(p); }};
+}
+
+// ---- retarget.holds ---------------------------------------------------------------------------
+class HoldsNode final : public Node {
+ public:
+  explicit HoldsNode(const Params& p) : weight_(p.get<double>("weight")) {
+    options_.points_a = split_names(p.get<std::string>("points"));
+    options_.points_b = split_names(p.get<std::string>("points2"));
+    options_.max_distance = p.get<double>("max_distance");
+    options_.hysteresis = p.get<double>("hysteresis");
+    options_.min_duration_s = p.get<double>("min_duration_s");
+  }
+
+  void run(RunContext& ctx) const override {
+    const retarget::HoldDetection d =
+        retarget::detect_holds(ctx.input<motion::Motion>("motion"), ctx.input<motion::Motion>("motion2"), options_);
+    ctx.report("holds", static_cast<std::int64_t>(d.holds.size()));
+    ctx.report("closest_m", d.closest);
+    std::int64_t frames = 0;
+    for (const retarget::Hold& h : d.holds) frames += h.last_frame - h.first_frame + 1;
+    ctx.report("held_frames", frames);
+    if (d.holds.empty())
+      ctx.log("no holds: the points come no closer than " + std::to_string(d.closest) + " m (max_distance " +
+              std::to_string(options_.max_distance) + " m)");
+    retarget::ConstraintSet set = retarget::hold_constraints(d, weight_);
+    report_set(ctx, set);
+    ctx.output("constraints", std::move(set));
+  }
+
+ private:
+  retarget::HoldOptions options_;
+  double weight_;
+};
+
+NodeType holds_type() {
+  NodeSpec spec;
+  spec.type = "retarget.holds";
+  spec.doc =
+      "Finds holds between two characters (Gleicher 1998 §7.3: dancers' hands that stay connected): spans where "
+      "a point of the first and a point of the second stay within max_distance, and emits them as distance "
+      "constraints keeping, every frame, the distance the source had.";
+  spec.inputs = {{"motion", "kg.Motion", true, "the first character's source clip (character 0)"},
+                 {"motion2", "kg.Motion", true, "the second character's source clip (character 1), same frames and rate"}};
+  spec.outputs = {kConstraintsOut};
+  spec.params = {
+      param("points", ParamType::String, std::string("lHand, rHand"),
+            "comma-separated points of the first character: 'Joint', 'Joint/end' or 'Joint[x y z]'"),
+      param("points2", ParamType::String, std::string("lHand, rHand"), "the same for the second character"),
+      param("max_distance", ParamType::Float, 0.15, "m: points this close are holding", 1e-6, 10.0),
+      param("hysteresis", ParamType::Float, 1.25, "a hold ends beyond max_distance x this", 1.0, 10.0),
+      param("min_duration_s", ParamType::Float, 0.2, "shorter holds are dropped, seconds", 0.0, 100.0),
+      param("weight", ParamType::Float, 1.0, "row weight of the hold constraints", 1e-6, 1e6),
+  };
+  return {spec, [](const Params& p) { return std::make_unique<HoldsNode>(p); }};
 }
 
 // ---- retarget.merge_constraints --------------------------------------------------------------
@@ -238,7 +298,7 @@ NodeType merge_type() {
 }  // namespace
 
 std::vector<graph::NodeType> retarget_constraint_node_types() {
-  return {footplants_type(), constraints_type(), merge_type()};
+  return {footplants_type(), constraints_type(), holds_type(), merge_type()};
 }
 
 }  // namespace kg

@@ -51,53 +51,16 @@ int find_by_role(const motion::Skeleton& sk, bool left, bool toe) {
   return -1;
 }
 
-PlantPoint point_by_name(const motion::Skeleton& sk, const std::string& spec, int character) {
-  std::string joint = spec;
-  bool end = false, has_offset = false;
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
-  if (spec.size() > 4 && spec.compare(spec.size() - 4, 4, "/end") == 0) {
-    joint = spec.substr(0, spec.size() - 4);
-    end = true;
-  } else if (const auto open = spec.find('['); open != std::string::npos) {
-    // "LeftFoot[0 -0.07 -0.05]": a point in the joint's frame (a heel), metres.
-    std::istringstream in(spec.substr(open + 1));
-    char close = 0;
-    if (spec.back() != ']' || !(in >> offset.x() >> offset.y() >> offset.z() >> close) || close != ']' ||
-        !offset.allFinite())
-      throw std::invalid_argument("footplants: point '" + spec + "': expected Joint[x y z] (metres, in the joint's frame)");
-    joint = spec.substr(0, open);
-    has_offset = true;
-  }
-  const int j = sk.find_joint(joint);
-  if (j < 0) {
-    std::string msg = "footplants: unknown joint '" + joint + "'";
-    const std::string near = nearest_joint_name(sk, joint);
-    if (!near.empty()) msg += " (nearest: '" + near + "')";
-    throw std::invalid_argument(msg);
-  }
-  PlantPoint p;
-  p.name = spec;
-  p.point.character = character;
-  p.point.joint = j;
-  if (end) {
-    if (sk.joint(j).end_sites.empty())
-      throw std::invalid_argument("footplants: joint '" + joint + "' has no End Site ('" + spec + "')");
-    p.point.local = sk.joint(j).end_sites.front();
-  }
-  if (has_offset) p.point.local = offset;
-  return p;
-}
-
 std::vector<PlantPoint> auto_points(const motion::Skeleton& sk, int character, std::vector<std::string>& notes) {
   std::vector<PlantPoint> out;
   for (bool left : {true, false}) {
     const int foot = find_by_role(sk, left, false);
     const int toe = find_by_role(sk, left, true);
-    if (foot >= 0) out.push_back(point_by_name(sk, sk.joint(foot).name, character));
+    if (foot >= 0) out.push_back(find_point(sk, sk.joint(foot).name, character));
     if (toe >= 0)
-      out.push_back(point_by_name(sk, sk.joint(toe).name + (sk.joint(toe).end_sites.empty() ? "" : "/end"), character));
+      out.push_back(find_point(sk, sk.joint(toe).name + (sk.joint(toe).end_sites.empty() ? "" : "/end"), character));
     else if (foot >= 0 && !sk.joint(foot).end_sites.empty())
-      out.push_back(point_by_name(sk, sk.joint(foot).name + "/end", character));
+      out.push_back(find_point(sk, sk.joint(foot).name + "/end", character));
   }
   if (out.empty())
     throw std::invalid_argument(
@@ -117,6 +80,43 @@ double percentile(std::vector<double> v, double q) {
 }
 
 }  // namespace
+
+PlantPoint find_point(const motion::Skeleton& sk, const std::string& spec, int character, const std::string& who) {
+  std::string joint = spec;
+  bool end = false, has_offset = false;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  if (spec.size() > 4 && spec.compare(spec.size() - 4, 4, "/end") == 0) {
+    joint = spec.substr(0, spec.size() - 4);
+    end = true;
+  } else if (const auto open = spec.find('['); open != std::string::npos) {
+    // "LeftFoot[0 -0.07 -0.05]": a point in the joint's frame (a heel), metres.
+    std::istringstream in(spec.substr(open + 1));
+    char close = 0;
+    if (spec.back() != ']' || !(in >> offset.x() >> offset.y() >> offset.z() >> close) || close != ']' ||
+        !offset.allFinite())
+      throw std::invalid_argument(who + ": point '" + spec + "': expected Joint[x y z] (metres, in the joint's frame)");
+    joint = spec.substr(0, open);
+    has_offset = true;
+  }
+  const int j = sk.find_joint(joint);
+  if (j < 0) {
+    std::string msg = who + ": unknown joint '" + joint + "'";
+    const std::string near = nearest_joint_name(sk, joint);
+    if (!near.empty()) msg += " (nearest: '" + near + "')";
+    throw std::invalid_argument(msg);
+  }
+  PlantPoint p;
+  p.name = spec;
+  p.point.character = character;
+  p.point.joint = j;
+  if (end) {
+    if (sk.joint(j).end_sites.empty())
+      throw std::invalid_argument(who + ": joint '" + joint + "' has no End Site ('" + spec + "')");
+    p.point.local = sk.joint(j).end_sites.front();
+  }
+  if (has_offset) p.point.local = offset;
+  return p;
+}
 
 int FootplantDetection::count(int point) const {
   return static_cast<int>(std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
@@ -142,7 +142,7 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
   if (o.points.empty())
     d.points = auto_points(sk, o.character, d.notes);
   else
-    for (const std::string& name : o.points) d.points.push_back(point_by_name(sk, name, o.character));
+    for (const std::string& name : o.points) d.points.push_back(find_point(sk, name, o.character));
 
   const int frames = m.frame_count();
   const std::size_t np = d.points.size();

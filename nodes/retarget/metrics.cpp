@@ -102,12 +102,9 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
   for (const Constraint& c : set.constraints) {
     const bool position = c.kind == "position", same_place = c.kind == "same_place";
     if (!position && !same_place) continue;
+    if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; })) continue;
     for (std::size_t i = 0; i < c.points.size(); ++i) {
       const PointRef& p = c.points[i];
-      if (p.character != 0)
-        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
-                                    std::to_string(p.character) +
-                                    "; foot skate is measured on one character");
       const Key key{p.joint, p.local.x(), p.local.y(), p.local.z()};
       auto [it, added] = index.try_emplace(key, points.size());
       if (added) {
@@ -271,15 +268,20 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
     throw std::invalid_argument("metrics: a result motion, constraints and their kinds are required");
   const Motion& result = *in.result;
   result.check();
-  for (const Constraint& c : in.constraints->constraints) {
-    for (const PointRef& p : c.points)
-      if (p.character != 0)
-        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
-                                    std::to_string(p.character) + "; the metrics measure one character");
-    for (const ChannelRef& ch : c.channels)
-      if (ch.character != 0)
-        throw std::invalid_argument("metrics: constraint '" + c.label + "' names character " +
-                                    std::to_string(ch.character) + "; the metrics measure one character");
+  if (in.constraints->character_count() > 2)
+    throw std::invalid_argument("metrics: the constraints name " + std::to_string(in.constraints->character_count()) +
+                                " characters; at most two are measured");
+  if (in.constraints->character_count() > 1 && !in.result2)
+    for (const Constraint& c : in.constraints->constraints)
+      if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character == 1; }) ||
+          std::any_of(c.channels.begin(), c.channels.end(), [](const ChannelRef& p) { return p.character == 1; }))
+        throw std::invalid_argument("metrics: constraint '" + c.label +
+                                    "' names character 1; give the second character's result (motion2)");
+  if (in.result2) {
+    in.result2->check();
+    if (in.result2->frame_count() != result.frame_count())
+      throw std::invalid_argument("metrics: the second character has " + std::to_string(in.result2->frame_count()) +
+                                  " frames, the first " + std::to_string(result.frame_count()));
   }
   check_constraints(*in.constraints, *in.kinds);
 
@@ -293,7 +295,10 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
     const double fps = result.fps;
     skeleton_at = [target, fps](int frame) { return target->skeleton_at(frame / fps); };
   }
-  const PoseCache poses(std::span<const Motion>(&result, 1), std::span<const PoseCache::SkeletonAt>(&skeleton_at, 1));
+  std::vector<Motion> characters{result};
+  if (in.result2) characters.push_back(*in.result2);
+  const std::vector<PoseCache::SkeletonAt> skeletons_at{skeleton_at, {}};
+  const PoseCache poses(characters, std::span(skeletons_at).first(characters.size()));
   const ViolationSummary summary = summarize_violations(*in.constraints, *in.kinds, poses, in.tolerance);
   for (const KindViolation& kv : summary.kinds) {
     KindMetrics km{kv, false};

@@ -26,6 +26,7 @@ class MetricsNode final : public graph::Node {
     const ConstraintKindTable kinds = kinds_for(set, ctx);
     MetricsInputs in;
     in.result = &ctx.input<motion::Motion>("motion");
+    if (ctx.has_input("motion2")) in.result2 = &ctx.input<motion::Motion>("motion2");
     in.constraints = &set;
     in.kinds = &kinds;
     if (ctx.has_input("source")) in.source = &ctx.input<motion::Motion>("source");
@@ -90,6 +91,7 @@ graph::NodeType metrics_node_type() {
                  {"constraints", "kg.Constraints", true, "the constraints it should meet"},
                  {"source", "kg.Motion", false, "the motion before adaptation, on its own skeleton"},
                  {"initial", "kg.Motion", false, "the initial estimate the solver started from"},
+                 {"motion2", "kg.Motion", false, "the second character's result, for constraints across characters"},
                  {"target", "kg.Target", false, "the target character: a morphing one gives each frame its skeleton"},
                  {"keys", "kg.KeySpacing", false, "the key spacing of the solve (else key_spacing)"},
                  {"solve_seconds", "kg.Scalar", false, "the solver's time, s, passed through"}},

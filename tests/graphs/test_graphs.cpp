@@ -3,6 +3,7 @@
 // output must read back to the same frames and joint world positions as its source.
 #include <algorithm>
 #include <filesystem>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -61,8 +62,11 @@ TEST_CASE("every graph in graphs/ validates", "[graphs]") {
   for (const auto& entry : fs::directory_iterator(kSource / "graphs")) {
     if (entry.path().extension() != ".yaml") continue;
     std::vector<std::string> args{"validate", entry.path().string()};
-    if (entry.path().filename() != "demo.yaml")  // the others read a clip given as `input`
-      args.insert(args.end(), {"--set", "input=" + (kSource / "tests/graphs/data/two_joints.bvh").string()});
+    // Every required variable is a clip (input, follow, lead, ...).
+    for (const auto& variable : YAML::LoadFile(entry.path().string())["variables"])
+      if (variable.second["required"] && variable.second["required"].as<bool>())
+        args.insert(args.end(), {"--set", variable.first.as<std::string>() + "=" +
+                                              (kSource / "tests/graphs/data/two_joints.bvh").string()});
     const Result r = kinegraph(args);
     INFO(entry.path() << "\n" << show(r));
     CHECK(r.code == 0);
@@ -125,6 +129,57 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
       CHECK(metrics["solve_seconds"].as<double>() > 0);
     }
   }
+}
+
+TEST_CASE("graphs/salsa.yaml retargets the follow of the salsa pair, hands held, the lead's legs kept",
+          "[graphs][data]") {
+  const fs::path follow = kData / "cmu/bvh_daz_two_person/61_10_scaled.bvh";
+  const fs::path lead = kData / "cmu/bvh_daz_two_person/60_10_scaled.bvh";
+  if (!fs::exists(follow) || !fs::exists(lead)) {
+    WARN("skipped: the salsa pair is not in " << kData);
+    return;
+  }
+  TempDir out;
+  const fs::path output = out / "follow.bvh", output2 = out / "lead.bvh", report = out / "metrics.json";
+  const Result r = kinegraph({"run", (kSource / "graphs/salsa.yaml").string(), "--set", "follow=" + follow.string(),
+                              "--set", "lead=" + lead.string(), "--set", "scale=0.8", "--set", "output=" + output.string(),
+                              "--set", "output2=" + output2.string(), "--set", "report=" + report.string()});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("solve: converged") != std::string::npos);
+
+  // The follow is 80% of her size; the lead keeps his.
+  const kg::motion::Motion follow_source = kg::motion::resample(kg::io::import_motion(follow.string(), "", {}).motion, 30);
+  const kg::motion::Motion lead_source = kg::motion::resample(kg::io::import_motion(lead.string(), "", {}).motion, 30);
+  const kg::motion::Motion small = kg::io::read_bvh(output).motion;
+  const kg::motion::Motion lead_result = kg::io::read_bvh(output2).motion;
+  REQUIRE(small.frame_count() == follow_source.frame_count());
+  REQUIRE(lead_result.frame_count() == lead_source.frame_count());
+  const int shin = small.skeleton->find_joint("lShin");
+  CHECK(small.skeleton->joint(shin).offset.norm() ==
+        Approx(0.8 * follow_source.skeleton->joint(shin).offset.norm()).epsilon(1e-6));
+
+  // Hand-holds were found and hold, with every other constraint, within 1 mm.
+  const YAML::Node metrics = YAML::LoadFile(report.string());
+  CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
+  bool held = false;
+  for (const YAML::Node& k : metrics["violation"]["kinds"])
+    if (k["kind"].as<std::string>() == "distance") held = k["rows"].as<int>() > 0 && k["violated_rows"].as<int>() == 0;
+  CHECK(held);
+
+  // The lead's lower body (frozen) is his captured one; his upper body moved to meet her.
+  const std::regex fixed("hip|[lr](Buttock|Thigh|Shin|Foot)");
+  double lower = 0, upper = 0;
+  for (int j = 0; j < lead_source.skeleton->joint_count(); ++j) {
+    const kg::motion::Joint& joint = lead_source.skeleton->joint(j);
+    for (std::size_t k = 0; k < joint.channels.size(); ++k) {
+      const int c = joint.first_channel + static_cast<int>(k);
+      const double change = (lead_result.values.col(c) - lead_source.values.col(c)).cwiseAbs().maxCoeff();
+      (std::regex_match(joint.name, fixed) ? lower : upper) = std::max(std::regex_match(joint.name, fixed) ? lower : upper, change);
+    }
+  }
+  CHECK(lower < 1e-4);  // the BVH's 6 decimals
+  CHECK(upper > 1e-3);
 }
 
 TEST_CASE("graphs/convert.yaml converts every clip in ../shared/data", "[graphs][data]") {

@@ -72,6 +72,12 @@ struct FootplantDetection {
   int count(int point) const;     // plants of one point
 };
 
+// A point by the syntax of FootplantOptions::points ("Joint", "Joint/end", "Joint[x y z]") on
+// `character`. Throws std::invalid_argument for an unknown joint (with the nearest name), a
+// missing End Site or a malformed offset; `who` starts the messages ("footplants").
+PlantPoint find_point(const motion::Skeleton& skeleton, const std::string& spec, int character,
+                      const std::string& who = "footplants");
+
 // Throws std::invalid_argument for a named joint that does not exist (with the nearest name),
 // when no foot joint is found automatically, or for options out of range.
 FootplantDetection detect_footplants(const motion::Motion& motion, const FootplantOptions& options);

@@ -75,8 +75,8 @@ struct SkateSummary {
   double worst = 0;                // metres, 0 without plants
   double mean = 0;                 // over plants
 };
-// Plants of `set` (travel left 0), see the header comment; throws std::invalid_argument naming
-// the constraint for a point of another character than 0.
+// Plants of character 0 in `set` (travel left 0), see the header comment; constraints reading a
+// point of another character are not plants of it and are passed over.
 std::vector<PlantSkate> find_plants(const ConstraintSet& set);
 // Plants and their travel in `motion` (character 0); throws std::out_of_range for frames or
 // joints outside it.
@@ -121,6 +121,7 @@ AddedEnergy energy_above_cutoff(const motion::Motion& result, const motion::Moti
 // ---- everything, and its JSON ----
 struct MetricsInputs {
   const motion::Motion* result = nullptr;      // required (character 0)
+  const motion::Motion* result2 = nullptr;     // character 1, required when a constraint names it
   const Target* target = nullptr;              // optional: a morphing target gives each frame its skeleton
   const ConstraintSet* constraints = nullptr;  // required
   const ConstraintKindTable* kinds = nullptr;  // required: every kind the set names
@@ -147,8 +148,9 @@ struct RetargetMetrics {
   std::string energy_reference;                               // "initial", "source" or ""
   std::optional<double> solve_seconds;
 };
-// Throws std::invalid_argument for missing inputs, constraints naming character 1 or mismatched
-// motions (message says which).
+// Violations cover every constraint (across characters too, with result2); foot skate, jerk and
+// energy are character 0's. Throws std::invalid_argument for missing inputs, constraints naming
+// character 1 without result2, or mismatched motions (message says which).
 RetargetMetrics compute_metrics(const MetricsInputs& inputs);
 // The JSON document (version 1), lengths in cm as the header comment says.
 void write_metrics_json(std::ostream& os, const RetargetMetrics& metrics);

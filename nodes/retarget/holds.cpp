@@ -1,0 +1,104 @@
+// Holds between two characters (holds.hpp).
+#include "kg/retarget/holds.hpp"
+
+#include <cmath>
+#include <limits>
+#include <stdexcept>
+
+#include "kg/motion/kinematics.hpp"
+
+namespace kg::retarget {
+
+namespace {
+
+// World positions of `points` at every frame: frames x points.
+std::vector<Eigen::Vector3d> positions(const motion::Motion& m, const std::vector<PlantPoint>& points) {
+  const motion::Skeleton& sk = *m.skeleton;
+  std::vector<Eigen::Vector3d> out(static_cast<std::size_t>(m.frame_count()) * points.size());
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  for (int f = 0; f < m.frame_count(); ++f) {
+    motion::forward_kinematics(sk, m.values.row(f), world);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      out[static_cast<std::size_t>(f) * points.size() + i] =
+          world[static_cast<std::size_t>(points[i].point.joint)] * points[i].point.local;
+  }
+  return out;
+}
+
+}  // namespace
+
+HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, const HoldOptions& o) {
+  if (!a.skeleton || !b.skeleton) throw std::invalid_argument("holds: a motion has no skeleton");
+  if (a.frame_count() != b.frame_count() || std::abs(a.fps - b.fps) > 1e-9 * a.fps)
+    throw std::invalid_argument("holds: the two motions differ in length or rate (" + std::to_string(a.frame_count()) +
+                                " frames at " + std::to_string(a.fps) + " Hz, " + std::to_string(b.frame_count()) +
+                                " at " + std::to_string(b.fps) + " Hz): resample them alike");
+  if (o.points_a.empty() || o.points_b.empty())
+    throw std::invalid_argument("holds: name at least one point on each character");
+  if (!(o.max_distance > 0) || !std::isfinite(o.max_distance))
+    throw std::invalid_argument("holds: max_distance must be positive");
+  if (!(o.hysteresis >= 1) || !std::isfinite(o.hysteresis))
+    throw std::invalid_argument("holds: hysteresis must be >= 1");
+  if (!(o.min_duration_s >= 0) || !std::isfinite(o.min_duration_s))
+    throw std::invalid_argument("holds: min_duration_s must be >= 0");
+  HoldDetection d;
+  for (const std::string& spec : o.points_a) d.points_a.push_back(find_point(*a.skeleton, spec, 0, "holds"));
+  for (const std::string& spec : o.points_b) d.points_b.push_back(find_point(*b.skeleton, spec, 1, "holds"));
+  const std::vector<Eigen::Vector3d> pa = positions(a, d.points_a), pb = positions(b, d.points_b);
+  const int frames = a.frame_count();
+  const int min_frames = std::max(1, static_cast<int>(std::ceil(o.min_duration_s * a.fps - 1e-9)));
+  d.closest = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < d.points_a.size(); ++i)
+    for (std::size_t j = 0; j < d.points_b.size(); ++j) {
+      std::vector<double> dist(static_cast<std::size_t>(frames));
+      for (int f = 0; f < frames; ++f) {
+        dist[static_cast<std::size_t>(f)] = (pa[static_cast<std::size_t>(f) * d.points_a.size() + i] -
+                                             pb[static_cast<std::size_t>(f) * d.points_b.size() + j])
+                                                .norm();
+        d.closest = std::min(d.closest, dist[static_cast<std::size_t>(f)]);
+      }
+      auto close = [&](int first, int last) {
+        if (last - first + 1 < min_frames) return;
+        d.holds.push_back({static_cast<int>(i), static_cast<int>(j), first, last,
+                           std::vector<double>(dist.begin() + first, dist.begin() + last + 1)});
+      };
+      bool in = false;
+      int start = 0;
+      for (int f = 0; f < frames; ++f) {
+        const double v = dist[static_cast<std::size_t>(f)];
+        if (!in && v <= o.max_distance) {
+          in = true;
+          start = f;
+        } else if (in && v > o.max_distance * o.hysteresis) {
+          in = false;
+          close(start, f - 1);
+        }
+      }
+      if (in) close(start, frames - 1);
+    }
+  if (frames == 0) d.closest = 0;
+  return d;
+}
+
+ConstraintSet hold_constraints(const HoldDetection& d, double weight) {
+  if (!(weight > 0)) throw std::invalid_argument("hold constraints: weight must be positive");
+  ConstraintSet set;
+  std::vector<int> numbers(d.points_a.size() * d.points_b.size(), 0);
+  for (const Hold& h : d.holds) {
+    const PlantPoint& a = d.points_a[static_cast<std::size_t>(h.point_a)];
+    const PlantPoint& b = d.points_b[static_cast<std::size_t>(h.point_b)];
+    const int n = ++numbers[static_cast<std::size_t>(h.point_a) * d.points_b.size() + static_cast<std::size_t>(h.point_b)];
+    Constraint c;
+    c.kind = "distance";
+    c.label = a.name + " ~ " + b.name + " hold " + std::to_string(n);
+    c.points = {a.point, b.point};
+    c.params = {h.distance.front()};
+    c.weight = weight;
+    for (int f = h.first_frame; f <= h.last_frame; ++f)
+      c.samples.push_back({.frames = {f, f}, .params = {h.distance[static_cast<std::size_t>(f - h.first_frame)]}});
+    set.constraints.push_back(std::move(c));
+  }
+  return set;
+}
+
+}  // namespace kg::retarget
