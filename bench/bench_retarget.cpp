@@ -4,7 +4,8 @@
 // walks CMU 16_15 and 07_05; the added jerk against the per-frame IK baseline; and the banded
 // Cholesky against Eigen's sparse Cholesky on a normal matrix of the solve's shape. One thread.
 //
-//   bench_retarget            (KG_SPACETIME_TRACE=1 prints every iteration)
+//   bench_retarget [NAME]     (only the cases whose name contains NAME; KG_SPACETIME_TRACE=1
+//                              prints every iteration)
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -22,6 +23,7 @@
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
 #include "kg/retarget/initial_estimate.hpp"
+#include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
@@ -90,12 +92,15 @@ struct Case {
   std::string name;
   motion::Motion m1;
   ConstraintSet set;
-  int rows = 0;
+  std::vector<int> frames_per_key{};  // per channel; empty: 4 for all
 };
 
+const char* g_only = nullptr;  // argv[1]: run only the cases whose name contains it
+
 void run(const Case& c, const ConstraintKindTable& table, int repeats) {
+  if (g_only && c.name.find(g_only) == std::string::npos) return;
   SpacetimeProblem problem;
-  problem.characters.push_back({.initial = c.m1});
+  problem.characters.push_back({.initial = c.m1, .frames_per_key = c.frames_per_key});
   problem.constraints = &c.set;
   problem.kinds = [&](const std::string& n) { return table.find(n); };
   if (std::getenv("KG_SPACETIME_TRACE")) problem.options.trace = [](const std::string& l) { std::printf("    %s\n", l.c_str()); };
@@ -175,7 +180,7 @@ Case synth_case(int steps, double legs_factor, const char* name) {
 // source (floor flavour, heights moved onto the target) with the floor, joint limits from the
 // source's range widened by 10 degrees, moved onto a 60% target whose thighs and shanks are 51%
 // (joints named as in CMU skeletons: the tibia and foot joints' offsets are thigh and shank),
-// and the initial estimate of §3.8 as m1.
+// the initial estimate of §3.8 as m1 and the key spacing of §3.7 (Laplacian pyramid).
 Case cmu_case(const motion::Motion& src, const char* name) {
   Eigen::VectorXd factors = Eigen::VectorXd::Constant(src.skeleton->joint_count(), 0.6);
   for (const char* leg : {"ltibia", "lfoot", "rtibia", "rfoot"}) factors[src.skeleton->find_joint(leg)] = 0.6 * 0.85;
@@ -192,7 +197,8 @@ Case cmu_case(const motion::Motion& src, const char* name) {
   c.name = name;
   c.m1 = initial_estimate(src, target, &on_target, finder).motion;
   c.set = on_target;
-  std::printf("  %s: %zu plants detected\n", name, d.plants.size());
+  c.frames_per_key = choose_key_spacing(src, {}).frames_per_key;
+  std::printf("  %s: %zu plants detected; keys every %d frames\n", name, d.plants.size(), c.frames_per_key.front());
   return c;
 }
 
@@ -235,7 +241,8 @@ void compare_linear_algebra(int n, int b) {
 
 }  // namespace
 
-int main() {
+int main(int argc, char** argv) {
+  if (argc > 1) g_only = argv[1];
   const ConstraintKindTable table = ConstraintKindTable::builtin();
   std::printf("== synthesized walk, 30 Hz, to 60%% (thighs and shanks 51%%): fixed plants, floor, joint limits ==\n");
   // ~112 frames: 5 steps.
@@ -274,6 +281,7 @@ int main() {
     std::printf("skipped CMU 07_05: %s not found\n", amc.c_str());
   }
 
+  if (g_only) return 0;
   std::printf("== linear algebra of one step ==\n");
   compare_linear_algebra(930, 120);
   compare_linear_algebra(1980, 270);
