@@ -40,7 +40,8 @@ class SpacetimeNode final : public Node {
   explicit SpacetimeNode(const Params& p)
       : freeze_text_{p.get<std::string>("freeze"), p.get<std::string>("freeze2")},
         freeze_{compile_freeze("freeze", freeze_text_[0]), compile_freeze("freeze2", freeze_text_[1])},
-        keys_(static_cast<int>(p.get<std::int64_t>("keys"))) {
+        keys_(static_cast<int>(p.get<std::int64_t>("keys"))),
+        strict_(p.get<bool>("strict")) {
     options_.epsilon = p.get<double>("epsilon");
     options_.equality_tolerance = options_.inequality_tolerance = p.get<double>("tolerance_mm") / 1000;
     options_.max_iterations = static_cast<int>(p.get<std::int64_t>("max_iterations"));
@@ -78,6 +79,9 @@ class SpacetimeNode final : public Node {
     for (const retarget::KindReport& k : result.kinds) ctx.report("worst_mm." + k.kind, k.worst() * 1000);
     ctx.report("message", result.message);
     ctx.log(result.message);
+    // Strict: a solve that missed its constraints fails the node (and the run's exit code), for
+    // batch runs that must not pass a bad result on; otherwise the best effort goes on, flagged.
+    if (strict_ && !result.converged()) throw std::runtime_error(result.message);
     for (std::size_t k = 0; k < result.frames_per_key.size(); ++k) {
       int finest = 1 << 30;
       for (int f : result.frames_per_key[k]) finest = std::min(finest, f);
@@ -139,6 +143,7 @@ class SpacetimeNode final : public Node {
   std::string freeze_text_[2];
   std::regex freeze_[2];
   int keys_;
+  bool strict_;
   retarget::SpacetimeOptions options_;
 };
 
@@ -164,8 +169,8 @@ NodeType spacetime_type() {
       "motion least (damped least squares, eq. 4; inequality rows through an active set; analytic Jacobians; "
       "banded Cholesky). Where constraints stay violated past tolerance it solves again with halved key "
       "spacing (§4 step 5) when `densify` is set. A second character (motion2) joins the same solve; "
-      "constraints refer to it as character 1. Not converging is reported (converged = false, message), "
-      "not an error.";
+      "constraints refer to it as character 1. Not converging is reported (converged = false, message) and, "
+      "with `strict`, fails the node.";
   spec.inputs = {
       {"motion", "kg.Motion", true, "the initial estimate m1 on the target skeleton (metres, radians)"},
       {"constraints", "kg.Constraints", true, "what must hold (characters 0 and, with motion2, 1)"},
@@ -192,6 +197,9 @@ NodeType spacetime_type() {
       param("freeze", ParamType::String, std::string(""),
             "regular expression (whole joint name) of joints whose channels must not change; \"\": none"),
       param("freeze2", ParamType::String, std::string(""), "the same for the second character"),
+      param("strict", ParamType::Bool, false,
+            "fail (a non-zero exit) when the constraints are not met; otherwise the best effort is output and "
+            "the failure reported (converged = false, message)"),
   };
   return {spec, [](const Params& p) { return std::make_unique<SpacetimeNode>(p); }};
 }

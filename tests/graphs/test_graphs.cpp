@@ -131,6 +131,104 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
   }
 }
 
+TEST_CASE("graphs/retarget.yaml on bad input: unknown joints, contradictions, other skeletons, broken targets",
+          "[graphs][data]") {
+  const fs::path clip = kData / "cmu/bvh_motionbuilder/16_15.bvh";
+  if (!fs::exists(clip)) {
+    WARN("skipped: " << clip << " not found");
+    return;
+  }
+  TempDir work;
+  auto retarget = [&](const std::vector<std::string>& sets) {
+    std::vector<std::string> args{"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
+                                  "--set", "output=" + (work / "out.bvh").string(), "--set",
+                                  "report=" + (work / "metrics.json").string()};
+    for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
+    return kinegraph(args);
+  };
+
+  SECTION("a constraint naming an unknown joint: file, line and the nearest name") {
+    work.write("typo.yaml", "version: 1\nconstraints:\n  - kind: position\n    points: [{joint: lfot}]\n"
+                            "    params: [0, 0.1, 0]\n    frames: [10, 20]\n");
+    const Result r = retarget({"constraints=" + (work / "typo.yaml").string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Catch::Contains("typo.yaml:4") && Catch::Contains("lfot") && Catch::Contains("lfoot"));
+    CHECK_FALSE(fs::exists(work / "out.bvh"));
+  }
+
+  SECTION("contradictory constraints: reported as not met; strict fails and writes nothing") {
+    // The left ankle at two places 30 cm apart over the same frames.
+    work.write("contradiction.yaml", R"(version: 1
+constraints:
+  - {kind: position, label: "ankle here", points: [{joint: lfoot}], params: [0.0, 0.1, 0.0], frames: [40, 50]}
+  - {kind: position, label: "ankle there", points: [{joint: lfoot}], params: [0.3, 0.1, 0.0], frames: [40, 50]}
+)");
+    const Result r = retarget({"constraints=" + (work / "contradiction.yaml").string()});
+    INFO(show(r));
+    CHECK(r.code == 0);  // the best effort is written, and says so
+    CHECK_THAT(r.err, Catch::Contains("did not converge") && Catch::Contains("ankle"));
+    CHECK(fs::exists(work / "out.bvh"));
+    const YAML::Node metrics = YAML::LoadFile((work / "metrics.json").string());
+    CHECK(metrics["violation"]["worst_cm"].as<double>() > 10);  // 15 cm each way, at best
+
+    fs::remove(work / "out.bvh");
+    const Result strict = retarget({"constraints=" + (work / "contradiction.yaml").string(), "strict=true"});
+    INFO(show(strict));
+    CHECK(strict.code == 1);
+    CHECK_THAT(strict.err, Catch::Contains("node solve (retarget.spacetime) failed") && Catch::Contains("ankle"));
+    CHECK_FALSE(fs::exists(work / "out.bvh"));
+  }
+
+  SECTION("a target skeleton of another structure names the difference") {
+    const fs::path other = kData / "cmu/asf_amc/07.asf";
+    if (!fs::exists(other)) {
+      WARN("skipped: " << other << " not found");
+      return;
+    }
+    const Result r = retarget({"target=" + other.string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Catch::Contains("07.asf") && Catch::Contains("joint"));
+    CHECK_FALSE(fs::exists(work / "out.bvh"));
+  }
+
+  SECTION("a malformed target file: file and line") {
+    work.write("target.yaml", "version: 1\nbones:\n  \"lfemur\": -0.5\n");
+    const Result r = retarget({"target=" + (work / "target.yaml").string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    CHECK_THAT(r.err, Catch::Contains("target.yaml:3"));
+    CHECK_FALSE(fs::exists(work / "out.bvh"));
+  }
+}
+
+TEST_CASE("graphs/retarget.yaml on runs and jumps of several skeletons and units", "[graphs][data]") {
+  // CMU runs and a jump as ASF/AMC (mm-like ASF units, 120 Hz), Daz BVH (cm) and MotionBuilder BVH.
+  const std::vector<fs::path> clips{kData / "cmu/asf_amc/09_06.amc", kData / "cmu/bvh_daz/09_06.bvh",
+                                    kData / "cmu/bvh_daz/02_03.bvh", kData / "cmu/bvh_daz/13_11.bvh"};
+  TempDir out;
+  int ran = 0;
+  for (const fs::path& clip : clips) {
+    if (!fs::exists(clip)) {
+      WARN("skipped: " << clip << " not found");
+      continue;
+    }
+    ++ran;
+    const fs::path output = out / "result.bvh", report = out / "metrics.json";
+    const Result r = kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
+                                "--set", "scale=0.7", "--set", "output=" + output.string(), "--set",
+                                "report=" + report.string(), "--set", "strict=true"});
+    INFO(clip << "\n" << show(r));
+    REQUIRE(r.code == 0);
+    const YAML::Node metrics = YAML::LoadFile(report.string());
+    CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
+    CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+    CHECK(kg::io::read_bvh(output).motion.frame_count() == metrics["frames"].as<int>());
+  }
+  if (ran == 0) WARN("skipped: no run or jump clip in " << kData);
+}
+
 TEST_CASE("graphs/salsa.yaml retargets the follow of the salsa pair, hands held, the lead's legs kept",
           "[graphs][data]") {
   const fs::path follow = kData / "cmu/bvh_daz_two_person/61_10_scaled.bvh";
