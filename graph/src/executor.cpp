@@ -45,8 +45,13 @@ std::string port_names(const std::vector<PortSpec>& ports) {
 class Context final : public RunContext {
  public:
   Context(const NodeInstance& node, const NodeSpec& spec, std::map<std::string, Value> inputs,
-          std::shared_ptr<const void> owner, const LogFn& log)
-      : node_(node), spec_(spec), inputs_(std::move(inputs)), owner_(std::move(owner)), log_(log) {}
+          std::shared_ptr<const void> owner, const LogFn& log, const Registry& registry)
+      : node_(node),
+        spec_(spec),
+        inputs_(std::move(inputs)),
+        owner_(std::move(owner)),
+        log_(log),
+        registry_(registry) {}
 
   const std::string& node_id() const override { return node_.id; }
   const Params& params() const override { return node_.params; }
@@ -83,6 +88,13 @@ class Context final : public RunContext {
 
   void log(const std::string& message) override { log_(node_.id, message); }
 
+  // The run's registry: built-in and plugin extensions alike (a plugin's constraint kinds reach
+  // the solver nodes this way).
+  std::shared_ptr<const void> find_extension(const std::string& interface,
+                                             const std::string& name) const override {
+    return registry_.find_extension(interface, name);
+  }
+
   std::map<std::string, Value>& outputs() { return outputs_; }
   std::vector<std::pair<std::string, Figure>>& figures() { return figures_; }
 
@@ -92,6 +104,7 @@ class Context final : public RunContext {
   std::map<std::string, Value> inputs_;
   std::shared_ptr<const void> owner_;
   const LogFn& log_;
+  const Registry& registry_;
   std::map<std::string, Value> outputs_;
   std::vector<std::pair<std::string, Figure>> figures_;
 };
@@ -167,7 +180,7 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
     const auto start = Clock::now();
     try {
       NodePtr node = inst.node ? inst.node : registry.create_node(inst.type, inst.params);
-      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log);
+      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log, registry);
       node->run(ctx);
       produced[i] = std::move(ctx.outputs());
       run.figures = std::move(ctx.figures());

@@ -376,3 +376,23 @@ connections:
   CHECK(depth == 0);
   CHECK_FALSE(in_string);
 }
+
+TEST_CASE("a running node finds the registry's extensions through its context") {
+  // How a solver node meets a plugin's constraint kinds: RunContext::find_extension.
+  Registry registry;
+  auto factory = std::make_shared<const double>(42.0);
+  registry.add_extension({"kg.TestInterface", "answer", factory, "a number"});
+  NodeSpec s{"test.lookup", 1, "Outputs the extension it finds, or -1.", {}, {{"out", "kg.Scalar", true, "a number"}}, {}};
+  registry.add_node({s, [](const Params&) {
+                       return kg_test::make_fn_node([](RunContext& ctx) {
+                         const auto found = ctx.find_extension("kg.TestInterface", "answer");
+                         const auto missing = ctx.find_extension("kg.TestInterface", "question");
+                         ctx.output("out", found && !missing ? *static_cast<const double*>(found.get()) : -1.0);
+                       });
+                     }});
+  const Graph g = load_graph_from_string("version: 1\nnodes:\n  look: {type: test.lookup}\n", "lookup.yaml", registry);
+  Logged log;
+  const RunResult r = run_graph(g, registry, log.options(1));
+  REQUIRE(r.ok);
+  CHECK(r.outputs.at("look.out").get<double>() == 42.0);
+}
