@@ -192,6 +192,69 @@ double PoseWriter::leg_extension(const BodyPose& pose, Side side) const {
   return (pose.feet[side].ankle - hip_world(pose, side)).norm() / figure_.dims.leg_length();
 }
 
+Eigen::Vector3d two_link_middle(const Eigen::Vector3d& base, const Eigen::Vector3d& tip, double l1, double l2,
+                                const Eigen::Vector3d& pole, double max_extension, double* reach) {
+  const Eigen::Vector3d d = tip - base;
+  const double D = d.norm();
+  const double Dc = std::clamp(D, std::abs(l1 - l2) + 1e-6 * (l1 + l2), max_extension * (l1 + l2));
+  const Eigen::Vector3d u = d / D;
+  // In the plane of the base-tip line and the pole, on the pole's side.
+  const Eigen::Vector3d side = (pole - pole.dot(u) * u).normalized();
+  const double cos_a = std::clamp((l1 * l1 + Dc * Dc - l2 * l2) / (2 * l1 * Dc), -1.0, 1.0);
+  if (reach) *reach = Dc;
+  return base + l1 * (cos_a * u + std::sqrt(1 - cos_a * cos_a) * side);
+}
+
+Eigen::Vector3d PoseWriter::shoulder_world(const BodyPose& pose, Side side) const {
+  const motion::Skeleton& sk = *figure_.skeleton;
+  // As write() poses the trunk: Spine takes half the pelvis-to-chest rotation, Chest the rest,
+  // the clavicle (Shoulder) none.
+  const Eigen::Matrix3d spine_world = pose.pelvis * half_rotation(pose.pelvis.transpose() * pose.chest);
+  const Eigen::Vector3d spine = pose.root + pose.pelvis * sk.joint(figure_.spine).offset;
+  const Eigen::Vector3d chest = spine + spine_world * sk.joint(figure_.chest).offset;
+  return chest + pose.chest * (sk.joint(figure_.shoulder[side]).offset + sk.joint(figure_.arm[side]).offset);
+}
+
+double PoseWriter::arm_extension(const BodyPose& pose, Side side) const {
+  const auto& target = pose.hands[side];
+  if (!target) return 0;
+  return (target->wrist - shoulder_world(pose, side)).norm() /
+         (figure_.dims.upper_arm + figure_.dims.forearm);
+}
+
+void PoseWriter::write_arm_ik(const BodyPose& pose, Side side, const HandTarget& target, double* frame) {
+  const Figure& f = figure_;
+  const motion::Skeleton& sk = *f.skeleton;
+  const double L1 = f.dims.upper_arm, L2 = f.dims.forearm;
+  const Eigen::Vector3d shoulder = shoulder_world(pose, side);
+  const Eigen::Vector3d u = (target.wrist - shoulder).normalized();
+  double Dc = 0;
+  const Eigen::Vector3d elbow =
+      two_link_middle(shoulder, target.wrist, L1, L2, target.elbow_pole, kMaxExtension, &Dc);
+  // The upper arm's frame: its bone along -Y, the forearm bending towards its +Z (the elbow's
+  // only channel is a flexion about X, like the knee's).
+  Eigen::Matrix3d upper;
+  upper.col(1) = (shoulder - elbow) / L1;
+  const Eigen::Vector3d fore = (shoulder + Dc * u - elbow) / L2;
+  upper.col(2) = (fore - fore.dot(upper.col(1)) * upper.col(1)).normalized();
+  upper.col(0) = upper.col(1).cross(upper.col(2));
+  const double flexion = std::atan2(fore.dot(upper.col(2)), -fore.dot(upper.col(1)));
+
+  auto put_zero = [&](int joint) {
+    const int c = sk.joint(joint).first_channel;
+    frame[c] = frame[c + 1] = frame[c + 2] = 0;
+    previous_[static_cast<std::size_t>(joint)] = Eigen::Vector3d::Zero();
+  };
+  put_zero(f.shoulder[side]);
+  set_euler(f.arm[side], pose.chest.transpose() * upper, frame);
+  const int ec = sk.joint(f.forearm[side]).first_channel;
+  frame[ec] = 0;
+  frame[ec + 1] = -flexion;
+  frame[ec + 2] = 0;
+  previous_[static_cast<std::size_t>(f.forearm[side])] = Eigen::Vector3d(0, -flexion, 0);
+  set_euler(f.hand[side], (upper * rot_x(-flexion)).transpose() * target.hand, frame);
+}
+
 void PoseWriter::set_euler(int joint, const Eigen::Matrix3d& local, double* frame) {
   Eigen::Vector3d& prev = previous_[static_cast<std::size_t>(joint)];
   prev = motion::matrix_to_euler(local, kZxy, prev);
@@ -219,6 +282,10 @@ double PoseWriter::write(const BodyPose& pose, double* frame) {
   set_euler(f.head, neck_half.transpose() * pose.chest.transpose() * pose.head, frame);
 
   for (Side side : {kLeft, kRight}) {
+    if (pose.hands[side]) {
+      write_arm_ik(pose, side, *pose.hands[side], frame);
+      continue;
+    }
     const ArmPose& a = pose.arms[side];
     // Written straight as Z (abduction) X (flexion) Y (none): no decomposition, so an arm raised
     // past 90 degrees meets no Euler singularity.

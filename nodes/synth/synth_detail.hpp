@@ -6,6 +6,7 @@
 
 #include <array>
 #include <functional>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -107,6 +108,16 @@ struct ArmPose {
   double elbow = 0;      // flexion, forearm forward
 };
 
+// An arm placed by two-link IK instead of angles: the hand's world rotation and where its wrist
+// (the Hand joint) must be, world metres; the elbow bends towards `elbow_pole` (a world
+// direction, not along the shoulder-wrist line). A point p of the hand then lies at
+// wrist + hand * p exactly while the wrist is within reach.
+struct HandTarget {
+  Eigen::Vector3d wrist = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d hand = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d elbow_pole = -Eigen::Vector3d::UnitY();
+};
+
 // Everything that fixes one frame, in world terms except the arms.
 struct BodyPose {
   Eigen::Vector3d root = Eigen::Vector3d::Zero();
@@ -114,8 +125,16 @@ struct BodyPose {
   Eigen::Matrix3d chest = Eigen::Matrix3d::Identity();   // world rotation of Chest (Spine takes half)
   Eigen::Matrix3d head = Eigen::Matrix3d::Identity();    // world rotation of Head (Neck takes half)
   std::array<ArmPose, 2> arms{};
+  std::array<std::optional<HandTarget>, 2> hands{};  // when set, replaces arms[side]
   std::array<FootState, 2> feet{};
 };
+
+// Two-link IK: where the middle joint (knee, elbow) of a chain from `base` (hip, shoulder) to
+// `tip` (ankle, wrist) of link lengths l1, l2 lies, bending towards `pole` (a direction not along
+// base-tip). A tip beyond max_extension (l1 + l2) or nearer than |l1 - l2| is reached as far
+// as it can be along the same line; `reach` (not null) gets the clamped base-tip distance.
+Eigen::Vector3d two_link_middle(const Eigen::Vector3d& base, const Eigen::Vector3d& tip, double l1, double l2,
+                                const Eigen::Vector3d& pole, double max_extension, double* reach = nullptr);
 
 // Turns body poses into frames, keeping the previous frame's Euler angles so each joint's angles
 // take the branch nearest them (continuity across frames).
@@ -124,8 +143,13 @@ class PoseWriter {
   explicit PoseWriter(const Figure& figure);
   // Hip-to-ankle distance over thigh + shank for one leg of `pose`.
   double leg_extension(const BodyPose& pose, Side side) const;
+  // Shoulder (Arm joint) to wrist target distance over upper arm + forearm; 0 without a target.
+  double arm_extension(const BodyPose& pose, Side side) const;
+  // World position of the Arm joint (the shoulder) of `pose`.
+  Eigen::Vector3d shoulder_world(const BodyPose& pose, Side side) const;
   // Writes the frame (skeleton channel layout). Returns the larger leg extension of the two legs;
-  // legs beyond kMaxExtension are solved at kMaxExtension (the caller checks the return value).
+  // legs (and arms with a target) beyond kMaxExtension are solved at kMaxExtension (the caller
+  // checks the return value and arm_extension).
   double write(const BodyPose& pose, double* frame);
 
   static constexpr double kMaxExtension = 0.9995;
@@ -133,6 +157,7 @@ class PoseWriter {
  private:
   Eigen::Vector3d hip_world(const BodyPose& pose, Side side) const;
   void set_euler(int joint, const Eigen::Matrix3d& local, double* frame);
+  void write_arm_ik(const BodyPose& pose, Side side, const HandTarget& target, double* frame);
 
   const Figure& figure_;
   std::vector<Eigen::Vector3d> previous_;  // per joint, ZXY angles of the previous frame

@@ -36,8 +36,9 @@ TEST_CASE("motion.synthesize declares its signature", "[synth][node]") {
   CHECK(spec.find_output("skeleton")->type == "kg.Skeleton");
   const graph::ParamSpec* kind = spec.find_param("kind");
   REQUIRE(kind != nullptr);
-  CHECK(kind->choices == std::vector<std::string>{"walk", "jump"});
-  for (const char* name : {"steps", "speed", "stature", "fps", "jump_height", "jump_distance", "gravity"}) {
+  CHECK(kind->choices == std::vector<std::string>{"walk", "jump", "climb"});
+  for (const char* name : {"steps", "speed", "stature", "fps", "jump_height", "jump_distance", "gravity",
+                           "rung_spacing", "rail_half_width", "ladder_distance"}) {
     CAPTURE(name);
     const graph::ParamSpec* p = spec.find_param(name);
     REQUIRE(p != nullptr);
@@ -100,4 +101,34 @@ TEST_CASE("motion.synthesize: bad params are refused before anything runs", "[sy
   CHECK_THROWS_WITH(load("{steps: 2.5}"), Catch::Contains("steps"));
   CHECK_THROWS_WITH(load("{gravity: -9.81}"), Catch::Contains("gravity"));
   CHECK_THROWS_WITH(load("{stride: 1}"), Catch::Contains("stride"));
+  // `steps` is foot landings for a walk (2 to 200) and rungs for a climb (1 to 60).
+  CHECK_NOTHROW(load("{kind: climb, steps: 1}"));
+  CHECK_THROWS_WITH(load("{kind: climb, steps: 61}"),
+                    Catch::Contains("bad.yaml:3") && Catch::Contains("steps 61: a climb takes 1 to 60"));
+  CHECK_THROWS_WITH(load("{kind: walk, steps: 1}"), Catch::Contains("steps 1: a walk takes 2 to 200"));
+  CHECK_THROWS_WITH(load("{kind: climb, rung_spacing: 0.5}"), Catch::Contains("rung_spacing"));
+  CHECK_THROWS_WITH(load("{kind: climb, ladder_distance: 0.1}"), Catch::Contains("ladder_distance"));
+  CHECK_THROWS_WITH(load("{kind: climb, rail_half_width: 1}"), Catch::Contains("rail_half_width"));
+}
+
+TEST_CASE("motion.synthesize runs a climb: the free function's clip, its figures reported", "[synth][node]") {
+  const graph::Registry r = synth_registry();
+  const std::string text = R"(version: 1
+nodes:
+  climb: {type: motion.synthesize, params: {kind: climb, steps: 2, rung_spacing: 0.28, ladder_distance: 0.48, fps: 30}}
+)";
+  const graph::Graph g = graph::load_graph_from_string(text, "climb.yaml", r);
+  const graph::RunResult result = graph::run_graph(g, r, {.jobs = 1});
+  REQUIRE(result.ok);
+  const auto& climb = result.outputs.at("climb.motion").get<motion::Motion>();
+  const synth::Synthesis direct =
+      synth::synthesize_climb({.rungs = 2, .rung_spacing = 0.28, .ladder_distance = 0.48, .fps = 30});
+  REQUIRE(climb.values.rows() == direct.motion.values.rows());
+  CHECK((climb.values - direct.motion.values).cwiseAbs().maxCoeff() == 0);
+  REQUIRE(result.nodes.size() == 1);
+  const graph::NodeRun& run = result.nodes.front();
+  REQUIRE(figure(run, "holds") != nullptr);
+  CHECK(std::get<std::int64_t>(*figure(run, "holds")) == static_cast<std::int64_t>(direct.holds.size()));
+  CHECK(std::get<std::int64_t>(*figure(run, "rungs_climbed")) == 2);
+  CHECK(std::get<double>(*figure(run, "max_arm_extension")) == direct.max_arm_extension);
 }

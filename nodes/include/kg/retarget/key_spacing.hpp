@@ -87,7 +87,7 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text);
 struct KeySpacingOptions {
   double threshold = 0.05;  // fraction of the band energy, in (0, 1)
   int spacing = 0;          // frames per key for channels in no group; 0 = automatic
-  std::string groups;       // parse_key_groups text; "" = one group of every channel
+  std::string groups{};     // parse_key_groups text; "" = one group of every channel
 };
 
 // What was decided for one group of channels (the first entry: the channels in no group).
