@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <limits>
 #include <random>
+#include <stdexcept>
 
 #include <Eigen/SparseCholesky>
 
@@ -183,11 +184,15 @@ Case synth_case(int steps, double legs_factor, const char* name) {
 // the initial estimate of §3.8 as m1 and the key spacing of §3.7 (Laplacian pyramid).
 Case cmu_case(const motion::Motion& src, const char* name) {
   Eigen::VectorXd factors = Eigen::VectorXd::Constant(src.skeleton->joint_count(), 0.6);
-  for (const char* leg : {"ltibia", "lfoot", "rtibia", "rfoot"}) factors[src.skeleton->find_joint(leg)] = 0.6 * 0.85;
+  for (const char* leg : {"ltibia", "lfoot", "rtibia", "rfoot"}) {
+    const int j = src.skeleton->find_joint(leg);
+    if (j < 0) throw std::runtime_error(std::string("bench: no joint ") + leg + " in " + src.name);
+    factors[j] = 0.6 * 0.85;
+  }
   const Target target = factor_target(src.skeleton, factors);
   const FootplantDetection d = detect_footplants(src, {});
   PlantConstraintOptions plant_options{.flavour = PlantFlavour::Floor, .above_floor = true};
-  for (int f = 0; f < src.frame_count(); ++f) plant_options.height_scale.push_back(target.overall_scale(f / src.fps));
+  plant_options.height_scale = plant_height_scale(target, src.fps);
   ConstraintSet set = footplant_constraints(d, src.frame_count(), plant_options);
   add_joint_limits(set, src);
   const ConstraintSet on_target = constraints_on_target(set, target);
@@ -262,7 +267,7 @@ int main(int argc, char** argv) {
   const std::string asf = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07.asf";
   const std::string amc = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07_05.amc";
   if (std::filesystem::exists(asf) && std::filesystem::exists(amc)) {
-    std::printf("== CMU 07_05 (slow walk) at 30 Hz to 60%% (thighs and shanks 51%%): detected fixed plants, floor, "
+    std::printf("== CMU 07_05 (slow walk) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor plants, floor, "
                 "joint limits; the library's initial estimate ==\n");
     io::ImportedMotion in = io::import_motion(amc, asf, {});
     const motion::Motion src = motion::resample(in.motion, 30.0);

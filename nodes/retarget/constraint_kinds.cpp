@@ -73,6 +73,11 @@ void check_common(const Constraint& c, std::size_t points, std::size_t min_chann
   if (c.samples.empty()) fail(c, "has no samples (frames)");
   const std::size_t frames = c.points.size() + c.channels.size();
   for (const Sample& s : c.samples) {
+    if (!s.locals.empty() && s.locals.size() != c.points.size())
+      fail(c, "a sample gives " + std::to_string(s.locals.size()) + " point offsets for " +
+                  std::to_string(c.points.size()) + " points");
+    for (const Eigen::Vector3d& l : s.locals)
+      if (!l.allFinite()) fail(c, "a sample's point offset is not finite");
     if (s.frames.size() != frames)
       fail(c, "a sample has " + std::to_string(s.frames.size()) + " frames, expected " + std::to_string(frames) +
                   " (one per point, then one per channel)");
@@ -568,7 +573,7 @@ void evaluate_into(const ConstraintKind& kind, const Constraint& c, const Sample
   scratch.points.resize(np);
   scratch.values.resize(nc);
   try {
-    for (std::size_t i = 0; i < np; ++i) scratch.points[i] = poses.point(c.points[i], s.frames[i]);
+    for (std::size_t i = 0; i < np; ++i) scratch.points[i] = poses.point(point_at(c, s, i), s.frames[i]);
     for (std::size_t i = 0; i < nc; ++i) scratch.values[i] = poses.value(c.channels[i], s.frames[np + i]);
   } catch (const std::out_of_range& e) {
     throw std::out_of_range("constraint '" + c.label + "': " + e.what());

@@ -113,9 +113,9 @@ class FootplantsNode final : public Node {
     ctx.report("source_skate_max_m", skate);
     retarget::PlantConstraintOptions make = make_;
     if (ctx.has_input("target")) {
-      const retarget::Target& target = ctx.input<retarget::Target>("target");
-      for (int f = 0; f < m.frame_count(); ++f) make.height_scale.push_back(target.overall_scale(f / m.fps));
-      ctx.report("height_scale", make.height_scale.empty() ? 1.0 : make.height_scale.front());
+      make.height_scale = retarget::plant_height_scale(ctx.input<retarget::Target>("target"), m.fps);
+      for (const retarget::PlantPoint& p : d.points)
+        ctx.report("height_scale." + p.name, make.height_scale(p.point, 0));
     }
     retarget::ConstraintSet set = retarget::footplant_constraints(d, m.frame_count(), make);
     report_set(ctx, set);
@@ -139,8 +139,8 @@ NodeType footplants_type() {
       "target connected, heights above the floor are scaled to its size.";
   spec.inputs = {{"motion", "kg.Motion", true, "the source clip the plants are read from"},
                  {"target", "kg.Target", false,
-                  "the character the plants are for: heights above the floor scale with its overall size (a smaller "
-                  "foot rests lower); horizontal positions stay the source's"}};
+                  "the character the plants are for (of `character`): heights above the floor scale with its feet (a "
+                  "smaller foot rests lower); horizontal positions stay the source's"}};
   spec.outputs = {kConstraintsOut};
   ParamSpec flavour = param("flavour", ParamType::Enum, std::string("fixed"),
                             "fixed: plant positions kept; floor: height plus non-skid only");

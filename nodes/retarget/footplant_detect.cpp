@@ -244,21 +244,28 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
   return d;
 }
 
+std::function<double(const PointRef&, int)> plant_height_scale(const Target& target, double fps) {
+  if (!(fps > 0) || !std::isfinite(fps)) throw std::invalid_argument("plant height scale: fps must be positive");
+  return [target, fps](const PointRef& point, int frame) { return height_factor(target, point, frame / fps); };
+}
+
 const char* to_string(PlantFlavour flavour) {
   return flavour == PlantFlavour::Fixed ? "fixed" : "floor";
 }
 
 ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, const PlantConstraintOptions& o) {
   if (!(o.weight > 0)) throw std::invalid_argument("footplant constraints: weight must be positive");
-  if (!o.height_scale.empty()) {
-    if (static_cast<int>(o.height_scale.size()) != frames)
-      throw std::invalid_argument("footplant constraints: " + std::to_string(o.height_scale.size()) +
-                                  " height scales for " + std::to_string(frames) + " frames");
-    for (double s : o.height_scale)
-      if (!(s > 0) || !std::isfinite(s)) throw std::invalid_argument("footplant constraints: height scales must be positive");
-  }
-  auto scale_at = [&](int f) { return o.height_scale.empty() ? 1.0 : o.height_scale[static_cast<std::size_t>(f)]; };
-  auto on_target = [&](double height, int f) { return d.floor + scale_at(f) * (height - d.floor); };
+  auto scale_at = [&](const PointRef& point, int f) {
+    if (!o.height_scale) return 1.0;
+    const double s = o.height_scale(point, f);
+    if (!(s > 0) || !std::isfinite(s))
+      throw std::invalid_argument("footplant constraints: height scale " + std::to_string(s) + " at frame " +
+                                  std::to_string(f) + " (expected > 0)");
+    return s;
+  };
+  auto on_target = [&](const PointRef& point, double height, int f) {
+    return d.floor + scale_at(point, f) * (height - d.floor);
+  };
   // A constraint whose target moves over its samples gets per-sample params, else one set.
   auto set_params = [](Constraint& c, std::vector<std::vector<double>> per_sample) {
     const bool constant = std::all_of(per_sample.begin(), per_sample.end(), [&](const auto& p) { return p == per_sample.front(); });
@@ -283,7 +290,7 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
     std::vector<std::vector<double>> targets;
     for (int f = p.first_frame; f <= p.last_frame; ++f) {
       pos.samples.push_back({.frames = {f}});
-      const double y = on_target(p.mean.y(), f);
+      const double y = on_target(pt.point, p.mean.y(), f);
       if (o.flavour == PlantFlavour::Fixed)
         targets.push_back({p.mean.x(), y, p.mean.z(), 1, 1, 1});
       else
@@ -314,7 +321,7 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
         above.samples.push_back({.frames = {f}});
         double low = d.floor;
         if (d.floor_estimated && f < static_cast<int>(pt.heights.size()))
-          low = std::min(low, on_target(pt.heights[static_cast<std::size_t>(f)], f));
+          low = std::min(low, on_target(pt.point, pt.heights[static_cast<std::size_t>(f)], f));
         bounds.push_back({-kInf, low, -kInf, kInf, kInf, kInf});
       }
       set_params(above, std::move(bounds));

@@ -141,7 +141,10 @@ Eigen::MatrixXd constraint_displacements(const motion::Motion& scaled, const Tar
       }
       const std::vector<Eigen::Isometry3d>& w = pose(f);
       points.clear();
-      for (const PointRef& p : c.points) points.push_back(w[static_cast<std::size_t>(p.joint)] * p.local);
+      for (std::size_t i = 0; i < c.points.size(); ++i) {
+        const PointRef p = point_at(c, sample, i);
+        points.push_back(w[static_cast<std::size_t>(p.joint)] * p.local);
+      }
       const std::vector<double>& params = sample.params.empty() ? c.params : sample.params;
       r.setZero();
       dp.setZero();

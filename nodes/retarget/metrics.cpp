@@ -95,14 +95,24 @@ Eigen::VectorXd displacement(const Motion& result, const Motion& reference, int 
 
 // ---- foot skate ----
 std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
-  // Point identity -> (label, frames), in order of first appearance.
+  // Point identity -> (label, frame -> offset at that frame), in order of first appearance.
   using Key = std::tuple<int, double, double, double>;
   std::map<Key, std::size_t> index;
-  std::vector<std::pair<PlantSkate, std::set<int>>> points;
+  std::vector<std::pair<PlantSkate, std::map<int, Eigen::Vector3d>>> points;
   for (const Constraint& c : set.constraints) {
     const bool position = c.kind == "position", same_place = c.kind == "same_place";
     if (!position && !same_place) continue;
     if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; })) continue;
+    // A target that moves on the floor is not a plant (a height that changes is: a morphing foot).
+    if (position) {
+      auto horizontal = [&](const Sample& s) {
+        const std::vector<double>& p = s.params.empty() ? c.params : s.params;
+        return std::pair(p.size() > 0 ? p[0] : 0.0, p.size() > 2 ? p[2] : 0.0);
+      };
+      if (std::any_of(c.samples.begin(), c.samples.end(),
+                      [&](const Sample& s) { return horizontal(s) != horizontal(c.samples.front()); }))
+        continue;
+    }
     for (std::size_t i = 0; i < c.points.size(); ++i) {
       const PointRef& p = c.points[i];
       const Key key{p.joint, p.local.x(), p.local.y(), p.local.z()};
@@ -113,11 +123,9 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
         plant.point = p;
         points.push_back({plant, {}});
       }
-      std::set<int>& frames = points[it->second].second;
-      for (const Sample& s : c.samples) {
-        if (position && !s.params.empty()) continue;  // a moving target, not a plant
-        if (i < s.frames.size()) frames.insert(s.frames[i]);
-      }
+      std::map<int, Eigen::Vector3d>& frames = points[it->second].second;
+      for (const Sample& s : c.samples)
+        if (i < s.frames.size()) frames.emplace(s.frames[i], point_at(c, s, i).local);
     }
   }
   std::vector<PlantSkate> plants;
@@ -125,8 +133,12 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
     auto it = frames.begin();
     while (it != frames.end()) {
       PlantSkate plant = proto;
-      plant.first_frame = plant.last_frame = plant.worst_frame = *it;
-      for (++it; it != frames.end() && *it == plant.last_frame + 1; ++it) plant.last_frame = *it;
+      plant.first_frame = plant.last_frame = plant.worst_frame = it->first;
+      plant.locals = {it->second};
+      for (++it; it != frames.end() && it->first == plant.last_frame + 1; ++it) {
+        plant.last_frame = it->first;
+        plant.locals.push_back(it->second);
+      }
       plants.push_back(plant);
     }
   }
@@ -137,9 +149,14 @@ SkateSummary foot_skate(const ConstraintSet& set, const PoseCache& poses) {
   SkateSummary out;
   out.plants = find_plants(set);
   for (PlantSkate& plant : out.plants) {
-    const Eigen::Vector3d start = poses.point(plant.point, plant.first_frame);
+    auto at = [&](int f) {
+      PointRef p = plant.point;
+      p.local = plant.locals[static_cast<std::size_t>(f - plant.first_frame)];
+      return poses.point(p, f);
+    };
+    const Eigen::Vector3d start = at(plant.first_frame);
     for (int f = plant.first_frame + 1; f <= plant.last_frame; ++f) {
-      const Eigen::Vector3d p = poses.point(plant.point, f);
+      const Eigen::Vector3d p = at(f);
       const double travel = std::hypot(p.x() - start.x(), p.z() - start.z());
       if (travel > plant.travel) {
         plant.travel = travel;

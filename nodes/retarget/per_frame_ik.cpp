@@ -94,7 +94,7 @@ class FrameProblem {
       ws_.values.resize(nv);
       for (std::size_t i = 0; i < np; ++i) {
         const int f = s.sample->frames[i];
-        const PointRef& p = c.points[i];
+        const PointRef p = point_at(c, *s.sample, i);
         ws_.points[i] =
             f == frame_
                 ? ws_.world[static_cast<std::size_t>(p.joint)] * p.local
@@ -121,7 +121,7 @@ class FrameProblem {
       if (jacobian) {
         for (std::size_t i = 0; i < np; ++i) {
           if (s.sample->frames[i] != frame_) continue;
-          const PointRef& p = c.points[i];
+          const PointRef p = point_at(c, *s.sample, i);
           ws_.point_jacobian.setZero(3, n);
           motion::point_jacobian(skeleton_, q, ws_.world, p.joint, p.local, ws_.point_jacobian);
           jacobian->middleRows(row0, s.rows).noalias() +=
@@ -311,7 +311,7 @@ PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& 
       for (std::size_t i = 0; i < np; ++i)
         ws.points[i] =
             solved_world[static_cast<std::size_t>(s.frames[i])][static_cast<std::size_t>(c.points[i].joint)] *
-            c.points[i].local;
+            point_at(c, s, i).local;
       for (std::size_t i = 0; i < c.channels.size(); ++i)
         ws.values[i] = out.values(s.frames[np + i], c.channels[i].channel);
       ws.residual.resize(rows);

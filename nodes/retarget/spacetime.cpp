@@ -357,7 +357,7 @@ class Pass {
     const KindInfo& kind = kinds_[static_cast<std::size_t>(s.constraint)];
     const std::size_t np = con.points.size(), nv = con.channels.size();
     for (std::size_t p = 0; p < np; ++p) {
-      const PointRef& pr = con.points[p];
+      const PointRef pr = point_at(con, sample, p);
       const Character& ch = chars_[static_cast<std::size_t>(pr.character)];
       points_[p] = ch.world[static_cast<std::size_t>(sample.frames[p]) * ch.joints + pr.joint] * pr.local;
     }
@@ -383,7 +383,7 @@ class Pass {
     for (const Piece& piece : s.pieces)
       std::fill_n(g_.data() + piece.g_offset, static_cast<std::size_t>(s.rows) * piece.channels.size(), 0.0);
     for (std::size_t p = 0; p < np; ++p) {
-      const PointRef& pr = con.points[p];
+      const PointRef pr = point_at(con, sample, p);
       Character& ch = chars_[static_cast<std::size_t>(pr.character)];
       const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
       if (piece.channels.empty()) continue;
@@ -741,6 +741,13 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
         throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
                                     std::to_string(s.joint_count()) + " joints)");
       if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
+    }
+    for (const Sample& s : c.samples) {
+      if (!s.locals.empty() && s.locals.size() != c.points.size())
+        throw std::invalid_argument(label_of(c) + ": a sample gives " + std::to_string(s.locals.size()) +
+                                    " point offsets for " + std::to_string(c.points.size()) + " points");
+      for (const Eigen::Vector3d& l : s.locals)
+        if (!l.allFinite()) throw std::invalid_argument(label_of(c) + ": a sample's point offset is not finite");
     }
     for (const ChannelRef& ch : c.channels) {
       if (ch.character < 0 || ch.character >= nchar)

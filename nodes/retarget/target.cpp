@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
@@ -256,12 +257,58 @@ Target skeleton_target(std::shared_ptr<const Skeleton> source, const Skeleton& o
   return t;
 }
 
-ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character) {
+double height_factor(const Target& target, const PointRef& point, double t) {
+  const motion::Skeleton& s = *target.source;
+  if (point.joint < 0 || point.joint >= s.joint_count())
+    throw std::invalid_argument("height factor: joint " + std::to_string(point.joint) + " out of range");
+  const Eigen::VectorXd factors = target.joint_factors(t);
+  double weight = 0, sum = 0;
+  auto add = [&](double length, double factor) {
+    weight += length;
+    sum += length * factor;
+  };
+  add(point.local.norm(), factors[point.joint]);
+  auto below = [&](int j) {  // j lies under the point's joint
+    for (j = s.joint(j).parent; j >= 0; j = s.joint(j).parent)
+      if (j == point.joint) return true;
+    return false;
+  };
+  for (int j = 0; j < s.joint_count(); ++j) {
+    if (!below(j)) continue;
+    add(s.joint(j).offset.norm(), factors[j]);
+    for (const Eigen::Vector3d& e : s.joint(j).end_sites) add(e.norm(), factors[j]);
+  }
+  if (point.local.isZero())
+    for (const Eigen::Vector3d& e : s.joint(point.joint).end_sites) add(e.norm(), factors[point.joint]);
+  return weight > 1e-9 ? sum / weight : target.overall_scale(t);
+}
+
+ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character, double fps) {
+  if (target.morphing() && !(fps > 0 && std::isfinite(fps)))
+    throw std::invalid_argument("constraints on a morphing target: the clip's frame rate is needed to scale points "
+                                "per frame (got " + std::to_string(fps) + ")");
   const Eigen::VectorXd factors = target.joint_factors(0.0);
+  std::map<int, Eigen::VectorXd> factors_at;  // frame -> factors, when morphing
+  auto factor = [&](int joint, int frame) {
+    if (!target.morphing()) return factors[joint];
+    auto it = factors_at.find(frame);
+    if (it == factors_at.end()) it = factors_at.emplace(frame, target.joint_factors(frame / fps)).first;
+    return it->second[joint];
+  };
+  auto moves = [&](const PointRef& p) { return p.character == character && p.joint >= 0 && p.joint < factors.size(); };
   ConstraintSet moved = constraints;
-  for (Constraint& c : moved.constraints)
+  for (Constraint& c : moved.constraints) {
+    if (std::none_of(c.points.begin(), c.points.end(), moves)) continue;
+    for (Sample& s : c.samples) {
+      if (s.locals.empty() && !target.morphing()) continue;
+      if (s.locals.empty())
+        for (const PointRef& p : c.points) s.locals.push_back(p.local);
+      for (std::size_t i = 0; i < c.points.size() && i < s.locals.size() && i < s.frames.size(); ++i)
+        if (moves(c.points[i])) s.locals[i] *= factor(c.points[i].joint, s.frames[i]);
+    }
     for (PointRef& p : c.points)
-      if (p.character == character && p.joint >= 0 && p.joint < factors.size()) p.local *= factors[p.joint];
+      if (moves(p)) p.local *= factors[p.joint];
+  }
   return moved;
 }
 

@@ -125,7 +125,10 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
       // Equality constraints within 1 mm and no inequality violated by more (the issue's figure).
       const YAML::Node metrics = YAML::LoadFile(report.string());
       CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
-      CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+      // A morphing foot shrinks under its planted ankle and toe tip (0.4 x a 12 cm foot over 4 s:
+      // about 3 mm over a half-second plant), so both cannot stay put: the solve splits that.
+      const bool morph = target.find("morph") != std::string::npos;
+      CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= (morph ? 0.4 : 0.2));
       CHECK(metrics["solve_seconds"].as<double>() > 0);
     }
   }

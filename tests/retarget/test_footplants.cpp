@@ -223,8 +223,10 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
   const int frames = m.frame_count();
 
   SECTION("heights above the floor scale per frame, horizontal positions stay") {
-    std::vector<double> scale(static_cast<std::size_t>(frames));
-    for (int f = 0; f < frames; ++f) scale[static_cast<std::size_t>(f)] = 1.0 - 0.4 * f / (frames - 1.0);  // a morph
+    // A morph, and feet that shrink faster than toes.
+    auto scale = [&](const PointRef& p, int f) {
+      return (1.0 - 0.4 * f / (frames - 1.0)) * (p.local.isZero() ? 1.0 : 0.9);
+    };
     const ConstraintSet fixed = footplant_constraints(d, frames, {.flavour = PlantFlavour::Fixed, .height_scale = scale});
     CHECK_NOTHROW(check_constraints(fixed, kinds));
     for (const Constraint& c : fixed.constraints) {
@@ -232,15 +234,15 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
       REQUIRE(c.kind == "position");
       for (const Sample& s : c.samples) {
         const std::vector<double>& params = s.params.empty() ? c.params : s.params;
-        const double sf = scale[static_cast<std::size_t>(s.frames[0])];
+        const double sf = scale(c.points[0], s.frames[0]);
         CHECK(params[0] == p.mean.x());
         CHECK(params[2] == p.mean.z());
         CHECK(params[1] == Approx(d.floor + sf * (p.mean.y() - d.floor)).margin(1e-12));
       }
     }
     // A constant scale gives one set of params per plant.
-    const ConstraintSet uniform = footplant_constraints(
-        d, frames, {.flavour = PlantFlavour::Floor, .height_scale = std::vector<double>(static_cast<std::size_t>(frames), 0.6)});
+    const ConstraintSet uniform =
+        footplant_constraints(d, frames, {.flavour = PlantFlavour::Floor, .height_scale = [](const PointRef&, int) { return 0.6; }});
     for (const Constraint& c : uniform.constraints)
       if (c.kind == "position")
         for (const Sample& s : c.samples) CHECK(s.params.empty());
@@ -277,12 +279,36 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
     CHECK(summarize_violations(level, kinds, chars).find("region")->worst > 0.02);
   }
 
-  SECTION("height scales of the wrong length or sign are refused") {
-    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = {0.6}}), Catch::Contains("height scales for"));
-    CHECK_THROWS_WITH(
-        footplant_constraints(d, frames, {.height_scale = std::vector<double>(static_cast<std::size_t>(frames), -1.0)}),
-        Catch::Contains("positive"));
+  SECTION("a height scale that is not positive is refused") {
+    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return -1.0; }}),
+                      Catch::Contains("expected > 0"));
+    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return NAN; }}),
+                      Catch::Contains("expected > 0"));
   }
+}
+
+TEST_CASE("height_factor: a foot point rests on the segments below it") {
+  const synth::Synthesis walk = synth::synthesize_walk({.steps = 2, .speed = 1.2, .stature = 1.75, .fps = 30});
+  const motion::Skeleton& s = *walk.motion.skeleton;
+  // Thighs and shanks (the offsets of LeftLeg and LeftFoot) at 0.5, feet and toes at 0.8, the rest 0.6.
+  Eigen::VectorXd factors = Eigen::VectorXd::Constant(s.joint_count(), 0.6);
+  for (const char* j : {"LeftLeg", "LeftFoot", "RightLeg", "RightFoot"}) factors[s.find_joint(j)] = 0.5;
+  for (const char* j : {"LeftToeBase", "RightToeBase"}) factors[s.find_joint(j)] = 0.8;
+  const Target target = factor_target(walk.motion.skeleton, factors);
+  const int ankle = s.find_joint("LeftFoot"), toe = s.find_joint("LeftToeBase");
+  // The ankle stands on the foot (LeftToeBase's offset) and the toes (its End Site): 0.8, not the
+  // shank's 0.5 nor the body's.
+  CHECK(height_factor(target, {0, ankle, Eigen::Vector3d::Zero()}, 0) == Approx(0.8));
+  CHECK(height_factor(target, {0, toe, s.joint(toe).end_sites.front()}, 0) == Approx(0.8));
+  // A heel offset on the foot joint weighs in the foot joint's own factor.
+  const double heel = height_factor(target, {0, ankle, Eigen::Vector3d(0, -0.07, -0.05)}, 0);
+  CHECK(heel < 0.8);
+  CHECK(heel > 0.5);
+  // Nothing below: the overall scale.
+  const int head = s.find_joint("Head");
+  if (s.joint(head).end_sites.empty())
+    CHECK(height_factor(target, {0, head, Eigen::Vector3d::Zero()}, 0) == Approx(target.overall_scale(0)));
+  CHECK_THROWS(height_factor(target, {0, 999, Eigen::Vector3d::Zero()}, 0));
 }
 
 TEST_CASE("footplants on real walks: plausible plant counts per foot") {
@@ -338,7 +364,8 @@ TEST_CASE("retarget.footplants node") {
       {{"motion", graph::Value::make(walk.motion)},
        {"target", graph::Value::make(uniform_target(walk.motion.skeleton, 0.6))}});
   const ConstraintSet& small_set = small.outputs.at("constraints").get<ConstraintSet>();
-  CHECK(std::get<double>(small.figures.at("height_scale")) == Approx(0.6));
+  CHECK(std::get<double>(small.figures.at("height_scale.LeftFoot")) == Approx(0.6));
+  CHECK(std::get<double>(small.figures.at("height_scale.LeftToeBase/end")) == Approx(0.6));
   REQUIRE(!small_set.constraints.empty());
   const double floor = std::get<double>(small.figures.at("floor_m"));
   for (const Constraint& c : small_set.constraints) {

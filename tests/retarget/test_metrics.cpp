@@ -134,6 +134,19 @@ TEST_CASE("metrics: foot skate is the greatest horizontal travel from the plant'
   for (Sample& sample : moving.samples) sample.params = {0.01 * sample.frames[0], 0, 0};
   others.constraints.push_back(moving);
   CHECK(find_plants(others).empty());
+
+  // A plant whose height target and point offset change per sample (a morphing foot) is one:
+  // its travel is measured at each frame's own offset.
+  ConstraintSet morph;
+  Constraint shrinking = on_foot("position", {0, 0, 0, 0, 1, 0}, 10, 20, "LeftHeel plant");
+  for (Sample& sample : shrinking.samples) {
+    sample.params = {0, 1.0 - 0.01 * sample.frames[0], 0, 0, 1, 0};
+    sample.locals = {Eigen::Vector3d(-0.01 * (sample.frames[0] - 10), 0, 0)};  // cancels the 1 cm/frame on X
+  }
+  morph.constraints.push_back(shrinking);
+  const SkateSummary ms = foot_skate(morph, PoseCache(std::span<const Motion>(&m, 1)));
+  REQUIRE(ms.plants.size() == 1);
+  CHECK(ms.plants[0].travel == Approx(0.03));  // only the slip on Z is left
 }
 
 TEST_CASE("metrics: RMS jerk of a sampled sine", "[metrics]") {

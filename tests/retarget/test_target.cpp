@@ -311,3 +311,50 @@ TEST_CASE("retarget.target node: uniform scale, a file, and the scale it ignores
   CHECK_THROWS(registry.create_node("retarget.target",
                                     kg::test::params_for(registry, "retarget.target", {{"scale", -1.0}})));
 }
+
+TEST_CASE("constraints on a morphing target: each sample's points scaled at its frame's time", "[retarget][target]") {
+  const kg::synth::Synthesis walk = kg::synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
+  const auto& s = *walk.motion.skeleton;
+  const int toe = joint(s, "LeftToeBase");
+  const Eigen::Vector3d tip = s.joint(toe).end_sites.front();
+  // 1.0 at t = 0 down to 0.5 at t = 2 s (frame 60 at 30 Hz).
+  const Target morph = kg::retarget::morph_target(
+      walk.motion.skeleton, {0.0, 2.0},
+      {Eigen::VectorXd::Ones(s.joint_count()), Eigen::VectorXd::Constant(s.joint_count(), 0.5)});
+  kg::retarget::Constraint plant{.kind = "position", .label = "toe tip", .points = {{0, toe, tip}},
+                                 .params = {0, 0, 0, 0, 1, 0}};
+  for (int f : {0, 30, 60, 75}) plant.samples.push_back({.frames = {f}});
+  kg::retarget::ConstraintSet set;
+  set.constraints.push_back(plant);
+
+  CHECK_THAT(thrown([&] { kg::retarget::constraints_on_target(set, morph); }), Catch::Contains("frame rate"));
+  const kg::retarget::ConstraintSet moved = kg::retarget::constraints_on_target(set, morph, 0, 30.0);
+  const kg::retarget::Constraint& c = moved.constraints.front();
+  CHECK((c.points[0].local - tip).norm() < 1e-12);  // the offset at time 0
+  REQUIRE(c.samples.size() == 4);
+  const double expected[] = {1.0, 0.75, 0.5, 0.5};
+  for (std::size_t i = 0; i < 4; ++i) {
+    REQUIRE(c.samples[i].locals.size() == 1);
+    CHECK((c.samples[i].locals[0] - expected[i] * tip).norm() < 1e-12);
+    // Which is the End Site of that frame's skeleton: the real toe tip, not a point ahead of it.
+    const auto at = morph.skeleton_at(c.samples[i].frames[0] / 30.0);
+    CHECK((c.samples[i].locals[0] - at->joint(toe).end_sites.front()).norm() < 1e-12);
+  }
+  // A constant target scales the constraint's points and leaves samples alone; the other
+  // character's points stay.
+  set.constraints.front().points.push_back({1, toe, tip});
+  for (auto& sm : set.constraints.front().samples) sm.frames.push_back(sm.frames.front());
+  const kg::retarget::ConstraintSet small = kg::retarget::constraints_on_target(set, kg::retarget::uniform_target(walk.motion.skeleton, 0.6));
+  CHECK((small.constraints.front().points[0].local - 0.6 * tip).norm() < 1e-12);
+  CHECK((small.constraints.front().points[1].local - tip).norm() < 1e-12);
+  CHECK(small.constraints.front().samples.front().locals.empty());
+
+  // The node needs the clip's frame rate for a morph.
+  const kg::graph::Registry registry = kg::test::registry_of(kg::retarget_target_node_types());
+  CHECK_THAT(thrown([&] {
+               kg::test::run_node(registry, "retarget.constraints_on_target",
+                                  kg::test::params_for(registry, "retarget.constraints_on_target", {}),
+                                  {{"constraints", kg::graph::Value::make(set)}, {"target", kg::graph::Value::make(morph)}});
+             }),
+             Catch::Contains("connect the clip to 'motion'"));
+}

@@ -49,10 +49,13 @@ const char* to_string(Relation relation);  // "equal", "at_least", "at_most"
 // One instant (or, for two-time constraints, a few instants) at which a constraint is sampled:
 // point i is read at frames[i] (frames.size() == points.size() + channels.size(); channels
 // after points). `params`, when not empty, replaces the constraint's params for this sample
-// (a target that moves per frame).
+// (a target that moves per frame). `locals`, when not empty (points.size() entries, metres in
+// each point's joint frame), replaces the points' local offsets for this sample: a point on a
+// segment whose length changes over the clip (a morphing target, §5).
 struct Sample {
   std::vector<int> frames;
   std::vector<double> params{};
+  std::vector<Eigen::Vector3d> locals{};
 };
 
 struct Constraint {
@@ -66,6 +69,13 @@ struct Constraint {
   std::vector<Sample> samples{};
   double weight = 1.0;           // row scale in least squares
 };
+
+// Point i of `constraint` as sample `sample` reads it (its local offset replaced by the sample's).
+inline PointRef point_at(const Constraint& constraint, const Sample& sample, std::size_t i) {
+  PointRef p = constraint.points[i];
+  if (!sample.locals.empty()) p.local = sample.locals[i];
+  return p;
+}
 
 struct ConstraintSet {
   std::vector<Constraint> constraints;

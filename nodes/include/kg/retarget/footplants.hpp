@@ -18,6 +18,7 @@
 //   ConstraintSet c = footplant_constraints(d, walk.frame_count(), {.flavour = PlantFlavour::Floor});
 #pragma once
 
+#include <functional>
 #include <limits>
 #include <string>
 #include <vector>
@@ -26,6 +27,7 @@
 
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraints.hpp"
+#include "kg/retarget/target.hpp"
 
 namespace kg::retarget {
 
@@ -98,12 +100,15 @@ struct PlantConstraintOptions {
   bool above_floor = false;
   double weight = 1.0;
   // Moving the plants onto a character of another size: at frame f a point's height above the
-  // floor is multiplied by height_scale[f] (the target's overall scale: a smaller foot rests
-  // lower on the floor), for plant heights and the source-height floor bounds alike. Horizontal
-  // plant positions stay where the source had them (the paper's fixed footprints). frames
-  // entries, each > 0; empty: 1.
-  std::vector<double> height_scale{};
+  // floor is multiplied by height_scale(point, f) (> 0; plant_height_scale below: a smaller foot
+  // rests lower on the floor), for plant heights and the source-height floor bounds alike.
+  // Horizontal plant positions stay where the source had them (the paper's fixed footprints).
+  // Empty: 1.
+  std::function<double(const PointRef& point, int frame)> height_scale{};
 };
+
+// height_scale for plants moved onto `target`: height_factor (target.hpp) at frame / fps seconds.
+std::function<double(const PointRef&, int)> plant_height_scale(const Target& target, double fps);
 
 // Constraints labelled "<point> plant <n>" (n from 1 per point) and "<point> above floor".
 ConstraintSet footplant_constraints(const FootplantDetection& detection, int frames,

@@ -11,8 +11,10 @@
 //                         same joint and local offset, so the height and non-skid halves of one
 //                         plant are one plant) and split into runs of consecutive frames. A run's
 //                         skate is the greatest horizontal (world X/Z, +Y is up) distance of the
-//                         point from where it was on the run's first frame. `position` constraints
-//                         whose samples carry their own params (a moving target) are not plants. A
+//                         point from where it was on the run's first frame (a sample's own point
+//                         offsets, on a morphing segment, are used at its frame). Samples of
+//                         `position` constraints whose own params move the target horizontally
+//                         are not plants (a height that changes is: a morphing foot). A
 //                         same_place tying two distant frames with nothing between gives two
 //                         one-frame runs (skate 0): its miss shows in the violation figures.
 //   RMS jerk              third finite difference of each channel times fps^3 (x[f+3] - 3x[f+2] +
@@ -67,6 +69,7 @@ struct PlantSkate {
   PointRef point;
   int first_frame = 0;  // the run of consecutive frames
   int last_frame = 0;
+  std::vector<Eigen::Vector3d> locals;  // the point's offset at each frame of the run (morphing)
   double travel = 0;    // metres, greatest horizontal distance from the first frame's position
   int worst_frame = 0;  // where it is reached
 };

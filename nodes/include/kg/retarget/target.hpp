@@ -125,10 +125,21 @@ LoadedTarget parse_target_yaml(std::shared_ptr<const motion::Skeleton> source, s
 // structure or an unknown extension.
 LoadedTarget load_target(std::shared_ptr<const motion::Skeleton> source, const std::string& path);
 
+// How much the height above the floor of `point` (on the source skeleton, resting on the floor:
+// an ankle, a toe tip) scales on the target at time t: the length-weighted mean factor of the
+// segments that hold it up, i.e. its own offset on its joint and every segment and End Site
+// below its joint (an ankle rests on the foot and toes, a toe tip on its End Site); the overall
+// scale when nothing lies below it.
+double height_factor(const Target& target, const PointRef& point, double t);
+
 // Constraints measured on the source character (points as offsets in source segments: a heel
 // on the foot), moved onto the target: every point of `character` has its local offset scaled
-// by its joint's factor, as End Sites are. A morphing target uses its factors at time 0.
-ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character = 0);
+// by its joint's factor, as End Sites are. On a morphing target each sample gets its own point
+// offsets (Sample::locals), scaled by the factors at its frames' times (frame / fps, s); the
+// constraint's points keep the offsets at time 0. Throws std::invalid_argument for a morphing
+// target without a positive fps.
+ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character = 0,
+                                    double fps = 0);
 
 }  // namespace kg::retarget
 
