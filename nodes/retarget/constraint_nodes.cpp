@@ -24,18 +24,6 @@ using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
 
-ParamSpec param(const char* name, ParamType type, graph::ParamValue value, const char* doc,
-                std::optional<double> min = {}, std::optional<double> max = {}) {
-  ParamSpec p;
-  p.name = name;
-  p.type = type;
-  p.default_value = std::move(value);
-  p.doc = doc;
-  p.min = min;
-  p.max = max;
-  return p;
-}
-
 std::vector<std::string> split_names(const std::string& text) {
   std::vector<std::string> out;
   std::stringstream in(text);
@@ -96,7 +84,8 @@ class FootplantsNode final : public Node {
     detect_.rest_window_s = p.get<double>("rest_window_s");
     detect_.floor = parse_floor(p.get<std::string>("floor"));
     detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
-    make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor : retarget::PlantFlavour::Fixed;
+    make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
+                                                             : retarget::PlantFlavour::Fixed;
     make_.above_floor = p.get<bool>("above_floor");
   }
 
@@ -134,37 +123,84 @@ NodeType footplants_type() {
       "Detects footplants (Gleicher 1998 §3.5): spans where a foot point is near the floor and nearly still "
       "(height and horizontal-speed thresholds with hysteresis, a minimum duration), and emits them as "
       "constraints: fixed (the plant's mean position, all axes) or floor (its height only, plus non-skid "
-      "same_place between consecutive frames: the solver may move the plant). With above_floor, every foot point "
+      "same_place between consecutive frames: the solver may move the plant). With above_floor, every foot "
+      "point "
       "stays above the floor (an estimated floor never lifts a point above where the source had it). With a "
       "target connected, heights above the floor are scaled to its size.";
-  spec.inputs = {{"motion", "kg.Motion", true, "the source clip the plants are read from"},
-                 {"target", "kg.Target", false,
-                  "the character the plants are for (of `character`): heights above the floor scale with its feet (a "
-                  "smaller foot rests lower); horizontal positions stay the source's"}};
+  spec.inputs = {
+      {"motion", "kg.Motion", true, "the source clip the plants are read from"},
+      {"target", "kg.Target", false,
+       "the character the plants are for (of `character`): heights above the floor scale with its feet (a "
+       "smaller foot rests lower); horizontal positions stay the source's"}};
   spec.outputs = {kConstraintsOut};
-  ParamSpec flavour = param("flavour", ParamType::Enum, std::string("fixed"),
-                            "fixed: plant positions kept; floor: height plus non-skid only");
+  ParamSpec flavour = ParamSpec{.name = "flavour",
+                                .type = ParamType::Enum,
+                                .default_value = std::string("fixed"),
+                                .doc = "fixed: plant positions kept; floor: height plus non-skid only"};
   flavour.choices = {"fixed", "floor"};
   spec.params = {
-      param("points", ParamType::String, std::string(),
-            "comma-separated points: 'Joint' (its origin), 'Joint/end' (its End Site) or 'Joint[x y z]' (metres "
-            "in the joint's frame, e.g. a heel); empty: per foot the ankle and the toe tip, found by common names"),
+      ParamSpec{.name = "points",
+                .type = ParamType::String,
+                .default_value = std::string(),
+                .doc = "comma-separated points: 'Joint' (its origin), 'Joint/end' (its End Site) or 'Joint[x "
+                       "y z]' (metres "
+                       "in the joint's frame, e.g. a heel); empty: per foot the ankle and the toe tip, found "
+                       "by common names"},
       flavour,
-      param("height_threshold", ParamType::Float, 0.03, "m above the point's rest level to enter a plant", 1e-6, 10.0),
-      param("speed_threshold", ParamType::Float, 0.15, "m/s horizontal speed to enter a plant", 1e-6, 100.0),
-      param("hysteresis", ParamType::Float, 1.5, "leave thresholds = enter thresholds x this", 1.0, 10.0),
-      param("min_duration_s", ParamType::Float, 0.08, "shorter plants are dropped, seconds", 0.0, 10.0),
-      param("trim_distance", ParamType::Float, 0.01,
-            "m: a plant's end frames farther than this from its median position are trimmed (0: none)", 0.0, 1.0),
-      param("rest_window_s", ParamType::Float, 1.0,
-            "s: a point's rest level is its lowest height within this window around each frame (0: over the "
-            "whole clip)",
-            0.0, 100.0),
-      param("floor", ParamType::String, std::string("auto"),
-            "floor height in metres, or 'auto' (a low percentile of the lowest foot point's heights)"),
-      param("above_floor", ParamType::Bool, false, "also keep every foot point above the floor at every frame"),
-      param("character", ParamType::Int, std::int64_t{0},
-            "which character of the solve the plants belong to (0 first, 1 second: motion2)", 0.0, 1.0),
+      ParamSpec{.name = "height_threshold",
+                .type = ParamType::Float,
+                .default_value = 0.03,
+                .doc = "m above the point's rest level to enter a plant",
+                .min = 1e-6,
+                .max = 10.0},
+      ParamSpec{.name = "speed_threshold",
+                .type = ParamType::Float,
+                .default_value = 0.15,
+                .doc = "m/s horizontal speed to enter a plant",
+                .min = 1e-6,
+                .max = 100.0},
+      ParamSpec{.name = "hysteresis",
+                .type = ParamType::Float,
+                .default_value = 1.5,
+                .doc = "leave thresholds = enter thresholds x this",
+                .min = 1.0,
+                .max = 10.0},
+      ParamSpec{.name = "min_duration_s",
+                .type = ParamType::Float,
+                .default_value = 0.08,
+                .doc = "shorter plants are dropped, seconds",
+                .min = 0.0,
+                .max = 10.0},
+      ParamSpec{
+          .name = "trim_distance",
+          .type = ParamType::Float,
+          .default_value = 0.01,
+          .doc = "m: a plant's end frames farther than this from its median position are trimmed (0: none)",
+          .min = 0.0,
+          .max = 1.0},
+      ParamSpec{.name = "rest_window_s",
+                .type = ParamType::Float,
+                .default_value = 1.0,
+                .doc = "s: a point's rest level is its lowest height within this window around each frame "
+                       "(0: over the "
+                       "whole clip)",
+                .min = 0.0,
+                .max = 100.0},
+      ParamSpec{
+          .name = "floor",
+          .type = ParamType::String,
+          .default_value = std::string("auto"),
+          .doc = "floor height in metres, or 'auto' (a low percentile of the lowest foot point's heights)"},
+      ParamSpec{.name = "above_floor",
+                .type = ParamType::Bool,
+                .default_value = false,
+                .doc = "also keep every foot point above the floor at every frame"},
+      ParamSpec{.name = "character",
+                .type = ParamType::Int,
+                .default_value = std::int64_t{0},
+                .doc = "which character of the solve the plants belong to (0 first, 1 second: motion2)",
+                .min = 0.0,
+                .max = 1.0},
   };
   return {spec, [](const Params& p) { return std::make_unique<FootplantsNode>(p); }};
 }
@@ -183,7 +219,8 @@ class ConstraintsNode final : public Node {
     if (ctx.has_input("constraints")) set = ctx.input<retarget::ConstraintSet>("constraints");
     if (!path_.empty()) retarget::merge_constraints(set, retarget::read_constraints_file(path_, characters));
     if (joint_limits_) {
-      const retarget::ConstraintSet limits = retarget::joint_limit_constraints(*m.skeleton, 0, m.frame_count());
+      const retarget::ConstraintSet limits =
+          retarget::joint_limit_constraints(*m.skeleton, 0, m.frame_count());
       ctx.report("joint_limits", static_cast<std::int64_t>(limits.constraints.size()));
       if (limits.constraints.empty()) ctx.log("the skeleton has no channel limits");
       retarget::merge_constraints(set, limits);
@@ -204,14 +241,20 @@ NodeType constraints_type() {
       "Reads a constraint file (YAML, version 1: constraints naming joints, frame ranges or times, "
       "joint limits by regular expression; see kg/retarget/constraint_io.hpp), adds the skeleton's own "
       "channel limits (ASF limits) if asked, and merges them with the constraints on the input.";
-  spec.inputs = {{"motion", "kg.Motion", true, "the clip whose skeleton resolves joint names and bounds frames"},
-                 {"constraints", "kg.Constraints", false, "constraints to merge with (e.g. footplants)"},
-                 {"motion2", "kg.Motion", false, "the second character's clip, for points with `character: 1`"}};
+  spec.inputs = {
+      {"motion", "kg.Motion", true, "the clip whose skeleton resolves joint names and bounds frames"},
+      {"constraints", "kg.Constraints", false, "constraints to merge with (e.g. footplants)"},
+      {"motion2", "kg.Motion", false, "the second character's clip, for points with `character: 1`"}};
   spec.outputs = {kConstraintsOut};
   spec.params = {
-      param("path", ParamType::InputPath, std::string(), "the constraint YAML file; empty: none"),
-      param("joint_limits", ParamType::Bool, false,
-            "add a parameter_range constraint per limited channel of the skeleton, every frame"),
+      ParamSpec{.name = "path",
+                .type = ParamType::InputPath,
+                .default_value = std::string(),
+                .doc = "the constraint YAML file; empty: none"},
+      ParamSpec{.name = "joint_limits",
+                .type = ParamType::Bool,
+                .default_value = false,
+                .doc = "add a parameter_range constraint per limited channel of the skeleton, every frame"},
   };
   return {spec, [](const Params& p) { return std::make_unique<ConstraintsNode>(p); }};
 }
@@ -228,12 +271,12 @@ class HoldsNode final : public Node {
   }
 
   void run(RunContext& ctx) const override {
-    const retarget::HoldDetection d =
-        retarget::detect_holds(ctx.input<motion::Motion>("motion"), ctx.input<motion::Motion>("motion2"), options_);
+    const retarget::HoldDetection d = retarget::detect_holds(ctx.input<motion::Motion>("motion"),
+                                                             ctx.input<motion::Motion>("motion2"), options_);
     ctx.report("holds", static_cast<std::int64_t>(d.holds.size()));
     ctx.report("closest_m", d.closest);
     std::int64_t frames = 0;
-    for (const retarget::Hold& h : d.holds) frames += h.last_frame - h.first_frame + 1;
+    for (const retarget::HoldSpan& h : d.holds) frames += h.last_frame - h.first_frame + 1;
     ctx.report("held_frames", frames);
     if (d.holds.empty())
       ctx.log("no holds: the points come no closer than " + std::to_string(d.closest) + " m (max_distance " +
@@ -252,20 +295,48 @@ NodeType holds_type() {
   NodeSpec spec;
   spec.type = "retarget.holds";
   spec.doc =
-      "Finds holds between two characters (Gleicher 1998 §7.3: dancers' hands that stay connected): spans where "
+      "Finds holds between two characters (Gleicher 1998 §7.3: dancers' hands that stay connected): spans "
+      "where "
       "a point of the first and a point of the second stay within max_distance, and emits them as distance "
       "constraints keeping, every frame, the distance the source had.";
   spec.inputs = {{"motion", "kg.Motion", true, "the first character's source clip (character 0)"},
-                 {"motion2", "kg.Motion", true, "the second character's source clip (character 1), same frames and rate"}};
+                 {"motion2", "kg.Motion", true,
+                  "the second character's source clip (character 1), same frames and rate"}};
   spec.outputs = {kConstraintsOut};
   spec.params = {
-      param("points", ParamType::String, std::string("lHand, rHand"),
-            "comma-separated points of the first character: 'Joint', 'Joint/end' or 'Joint[x y z]'"),
-      param("points2", ParamType::String, std::string("lHand, rHand"), "the same for the second character"),
-      param("max_distance", ParamType::Float, 0.15, "m: points this close are holding", 1e-6, 10.0),
-      param("hysteresis", ParamType::Float, 1.25, "a hold ends beyond max_distance x this", 1.0, 10.0),
-      param("min_duration_s", ParamType::Float, 0.2, "shorter holds are dropped, seconds", 0.0, 100.0),
-      param("weight", ParamType::Float, 1.0, "row weight of the hold constraints", 1e-6, 1e6),
+      ParamSpec{
+          .name = "points",
+          .type = ParamType::String,
+          .default_value = std::string("lHand, rHand"),
+          .doc = "comma-separated points of the first character: 'Joint', 'Joint/end' or 'Joint[x y z]'"},
+      ParamSpec{.name = "points2",
+                .type = ParamType::String,
+                .default_value = std::string("lHand, rHand"),
+                .doc = "the same for the second character"},
+      ParamSpec{.name = "max_distance",
+                .type = ParamType::Float,
+                .default_value = 0.15,
+                .doc = "m: points this close are holding",
+                .min = 1e-6,
+                .max = 10.0},
+      ParamSpec{.name = "hysteresis",
+                .type = ParamType::Float,
+                .default_value = 1.25,
+                .doc = "a hold ends beyond max_distance x this",
+                .min = 1.0,
+                .max = 10.0},
+      ParamSpec{.name = "min_duration_s",
+                .type = ParamType::Float,
+                .default_value = 0.2,
+                .doc = "shorter holds are dropped, seconds",
+                .min = 0.0,
+                .max = 100.0},
+      ParamSpec{.name = "weight",
+                .type = ParamType::Float,
+                .default_value = 1.0,
+                .doc = "row weight of the hold constraints",
+                .min = 1e-6,
+                .max = 1e6},
   };
   return {spec, [](const Params& p) { return std::make_unique<HoldsNode>(p); }};
 }

@@ -118,6 +118,19 @@ PlantPoint find_point(const motion::Skeleton& sk, const std::string& spec, int c
   return p;
 }
 
+std::vector<Eigen::Vector3d> point_positions(const motion::Motion& m, const std::vector<PlantPoint>& points) {
+  const motion::Skeleton& sk = *m.skeleton;
+  std::vector<Eigen::Vector3d> out(static_cast<std::size_t>(m.frame_count()) * points.size());
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  for (int f = 0; f < m.frame_count(); ++f) {
+    motion::forward_kinematics(sk, m.values.row(f), world);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      out[static_cast<std::size_t>(f) * points.size() + i] =
+          world[static_cast<std::size_t>(points[i].point.joint)] * points[i].point.local;
+  }
+  return out;
+}
+
 int FootplantDetection::count(int point) const {
   return static_cast<int>(std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
 }
@@ -146,14 +159,7 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
 
   const int frames = m.frame_count();
   const std::size_t np = d.points.size();
-  // Positions: frames x points.
-  std::vector<Eigen::Vector3d> pos(static_cast<std::size_t>(frames) * np);
-  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
-  for (int f = 0; f < frames; ++f) {
-    motion::forward_kinematics(sk, m.values.row(f), world);
-    for (std::size_t i = 0; i < np; ++i)
-      pos[static_cast<std::size_t>(f) * np + i] = world[static_cast<std::size_t>(d.points[i].point.joint)] * d.points[i].point.local;
-  }
+  const std::vector<Eigen::Vector3d> pos = point_positions(m, d.points);
   auto at = [&](int f, std::size_t i) -> const Eigen::Vector3d& { return pos[static_cast<std::size_t>(f) * np + i]; };
 
   std::vector<std::vector<double>> heights(np);

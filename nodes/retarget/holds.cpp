@@ -5,30 +5,13 @@
 #include <limits>
 #include <stdexcept>
 
-#include "kg/motion/kinematics.hpp"
 
 namespace kg::retarget {
 
-namespace {
-
-// World positions of `points` at every frame: frames x points.
-std::vector<Eigen::Vector3d> positions(const motion::Motion& m, const std::vector<PlantPoint>& points) {
-  const motion::Skeleton& sk = *m.skeleton;
-  std::vector<Eigen::Vector3d> out(static_cast<std::size_t>(m.frame_count()) * points.size());
-  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
-  for (int f = 0; f < m.frame_count(); ++f) {
-    motion::forward_kinematics(sk, m.values.row(f), world);
-    for (std::size_t i = 0; i < points.size(); ++i)
-      out[static_cast<std::size_t>(f) * points.size() + i] =
-          world[static_cast<std::size_t>(points[i].point.joint)] * points[i].point.local;
-  }
-  return out;
-}
-
-}  // namespace
-
 HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, const HoldOptions& o) {
   if (!a.skeleton || !b.skeleton) throw std::invalid_argument("holds: a motion has no skeleton");
+  a.check();
+  b.check();
   if (a.frame_count() != b.frame_count() || std::abs(a.fps - b.fps) > 1e-9 * a.fps)
     throw std::invalid_argument("holds: the two motions differ in length or rate (" + std::to_string(a.frame_count()) +
                                 " frames at " + std::to_string(a.fps) + " Hz, " + std::to_string(b.frame_count()) +
@@ -44,7 +27,7 @@ HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, con
   HoldDetection d;
   for (const std::string& spec : o.points_a) d.points_a.push_back(find_point(*a.skeleton, spec, 0, "holds"));
   for (const std::string& spec : o.points_b) d.points_b.push_back(find_point(*b.skeleton, spec, 1, "holds"));
-  const std::vector<Eigen::Vector3d> pa = positions(a, d.points_a), pb = positions(b, d.points_b);
+  const std::vector<Eigen::Vector3d> pa = point_positions(a, d.points_a), pb = point_positions(b, d.points_b);
   const int frames = a.frame_count();
   const int min_frames = std::max(1, static_cast<int>(std::ceil(o.min_duration_s * a.fps - 1e-9)));
   d.closest = std::numeric_limits<double>::infinity();
@@ -84,7 +67,7 @@ ConstraintSet hold_constraints(const HoldDetection& d, double weight) {
   if (!(weight > 0)) throw std::invalid_argument("hold constraints: weight must be positive");
   ConstraintSet set;
   std::vector<int> numbers(d.points_a.size() * d.points_b.size(), 0);
-  for (const Hold& h : d.holds) {
+  for (const HoldSpan& h : d.holds) {
     const PlantPoint& a = d.points_a[static_cast<std::size_t>(h.point_a)];
     const PlantPoint& b = d.points_b[static_cast<std::size_t>(h.point_b)];
     const int n = ++numbers[static_cast<std::size_t>(h.point_a) * d.points_b.size() + static_cast<std::size_t>(h.point_b)];

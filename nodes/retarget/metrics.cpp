@@ -296,9 +296,10 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
                                     "' names character 1; give the second character's result (motion2)");
   if (in.result2) {
     in.result2->check();
-    if (in.result2->frame_count() != result.frame_count())
+    if (in.result2->frame_count() != result.frame_count() || std::abs(in.result2->fps - result.fps) > 1e-9 * result.fps)
       throw std::invalid_argument("metrics: the second character has " + std::to_string(in.result2->frame_count()) +
-                                  " frames, the first " + std::to_string(result.frame_count()));
+                                  " frames at " + std::to_string(in.result2->fps) + " Hz, the first " +
+                                  std::to_string(result.frame_count()) + " at " + std::to_string(result.fps) + " Hz");
   }
   check_constraints(*in.constraints, *in.kinds);
 

@@ -1032,7 +1032,7 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
       constexpr std::size_t kStallWindow = 3;
       if (can_densify && worst_history.size() > kStallWindow &&
           worst_now > 0.98 * worst_history[worst_history.size() - 1 - kStallWindow]) {
-        stop = "no further progress";
+        stop = "keys too far apart";
         break;
       }
       if (step_norm < 1e-10 || decrease <= (alpha == 1 ? 1e-4 : 1e-7) * (F + decrease) ||

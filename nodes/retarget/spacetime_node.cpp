@@ -2,8 +2,8 @@
 // (converged or not, violations) is reported as figures and a log line, never thrown (tier 3).
 #include <algorithm>
 #include <cstdint>
-#include <optional>
 #include <memory>
+#include <optional>
 #include <regex>
 #include <stdexcept>
 #include <string>
@@ -31,7 +31,8 @@ std::regex compile_freeze(const std::string& name, const std::string& pattern) {
   try {
     return std::regex(pattern, std::regex::ECMAScript);
   } catch (const std::regex_error& e) {
-    throw std::invalid_argument(name + ": '" + pattern + "' is not a valid regular expression (" + e.what() + ")");
+    throw std::invalid_argument(name + ": '" + pattern + "' is not a valid regular expression (" + e.what() +
+                                ")");
   }
 }
 
@@ -59,7 +60,8 @@ class SpacetimeNode final : public Node {
         if (ctx.has_input(port))
           throw std::invalid_argument(std::string("input '") + port + "' is connected but 'motion2' is not");
       if (set.character_count() > 1)
-        throw std::invalid_argument("the constraints refer to a second character but 'motion2' is not connected");
+        throw std::invalid_argument(
+            "the constraints refer to a second character but 'motion2' is not connected");
     }
     const retarget::ConstraintKindTable kinds = retarget::kinds_for(set, ctx);
     problem.constraints = &set;
@@ -106,8 +108,8 @@ class SpacetimeNode final : public Node {
       const retarget::KeySpacing& keys = ctx.input<retarget::KeySpacing>(keys_port);
       if (static_cast<int>(keys.frames_per_key.size()) != channels)
         throw std::invalid_argument(std::string("input '") + keys_port + "' has " +
-                                    std::to_string(keys.frames_per_key.size()) + " key spacings, " + who + " has " +
-                                    std::to_string(channels) + " channels");
+                                    std::to_string(keys.frames_per_key.size()) + " key spacings, " + who +
+                                    " has " + std::to_string(channels) + " channels");
       cp.frames_per_key = keys.frames_per_key;
     } else {
       cp.frames_per_key.assign(static_cast<std::size_t>(channels), keys_);
@@ -116,12 +118,14 @@ class SpacetimeNode final : public Node {
       const retarget::Target& target = ctx.input<retarget::Target>(target_port);
       if (!target.skeleton || target.skeleton->joint_count() != sk.joint_count() ||
           target.skeleton->channel_count() != channels)
-        throw std::invalid_argument(std::string("input '") + target_port + "': the target's skeleton (" +
-                                    (target.skeleton ? std::to_string(target.skeleton->joint_count()) : "no") +
-                                    " joints) has another structure than " + who + "'s (" +
-                                    std::to_string(sk.joint_count()) + " joints)");
+        throw std::invalid_argument(
+            std::string("input '") + target_port + "': the target's skeleton (" +
+            (target.skeleton ? std::to_string(target.skeleton->joint_count()) : "no") +
+            " joints) has another structure than " + who + "'s (" + std::to_string(sk.joint_count()) +
+            " joints)");
       if (target.morphing())
-        for (int f = 0; f < cp.initial.frame_count(); ++f) cp.skeleton_per_frame.push_back(target.skeleton_at(f / cp.initial.fps));
+        for (int f = 0; f < cp.initial.frame_count(); ++f)
+          cp.skeleton_per_frame.push_back(target.skeleton_at(f / cp.initial.fps));
     }
     const std::string& pattern = freeze_text_[static_cast<std::size_t>(index)];
     if (!pattern.empty()) {
@@ -147,18 +151,6 @@ class SpacetimeNode final : public Node {
   retarget::SpacetimeOptions options_;
 };
 
-ParamSpec param(const char* name, ParamType type, graph::ParamValue value, const char* doc,
-                std::optional<double> min = {}, std::optional<double> max = {}) {
-  ParamSpec p;
-  p.name = name;
-  p.type = type;
-  p.default_value = std::move(value);
-  p.doc = doc;
-  p.min = min;
-  p.max = max;
-  return p;
-}
-
 NodeType spacetime_type() {
   NodeSpec spec;
   spec.type = "retarget.spacetime";
@@ -183,23 +175,53 @@ NodeType spacetime_type() {
                   {"motion2", "kg.Motion", false, "the second character's result, when motion2 is connected"},
                   {"seconds", "kg.Scalar", true, "wall time of the solve, s (for retarget.metrics)"}};
   spec.params = {
-      param("epsilon", ParamType::Float, 1e-4,
-            "damping weight of the change (x^T M x, M = squared reach of each channel's joint, 1 for translation)",
-            1e-12, 1.0),
-      param("tolerance_mm", ParamType::Float, 1.0,
-            "converged when every equality row is within this and no inequality row is violated by more (mm; "
-            "for parameter rows the same number in milliradians)",
-            1e-6, 1000.0),
-      param("max_iterations", ParamType::Int, std::int64_t{40}, "Gauss-Newton iterations per pass", 0, 10000),
-      param("densify", ParamType::Bool, true, "retry with halved key spacing (down to 1) while violated"),
-      param("keys", ParamType::Int, std::int64_t{4}, "frames between keys when no `keys` input is connected", 1,
-            1000),
-      param("freeze", ParamType::String, std::string(""),
-            "regular expression (whole joint name) of joints whose channels must not change; \"\": none"),
-      param("freeze2", ParamType::String, std::string(""), "the same for the second character"),
-      param("strict", ParamType::Bool, false,
-            "fail (a non-zero exit) when the constraints are not met; otherwise the best effort is output and "
-            "the failure reported (converged = false, message)"),
+      ParamSpec{.name = "epsilon",
+                .type = ParamType::Float,
+                .default_value = 1e-4,
+                .doc = "damping weight of the change (x^T M x, M = squared reach of each channel's joint, 1 "
+                       "for translation)",
+                .min = 1e-12,
+                .max = 1.0},
+      ParamSpec{.name = "tolerance_mm",
+                .type = ParamType::Float,
+                .default_value = 1.0,
+                .doc = "converged when every equality row is within this and no inequality row is violated "
+                       "by more (mm; "
+                       "for parameter rows the same number in milliradians)",
+                .min = 1e-6,
+                .max = 1000.0},
+      ParamSpec{.name = "max_iterations",
+                .type = ParamType::Int,
+                .default_value = std::int64_t{40},
+                .doc = "Gauss-Newton iterations per pass",
+                .min = 0,
+                .max = 10000},
+      ParamSpec{.name = "densify",
+                .type = ParamType::Bool,
+                .default_value = true,
+                .doc = "retry with halved key spacing (down to 1) while violated"},
+      ParamSpec{.name = "keys",
+                .type = ParamType::Int,
+                .default_value = std::int64_t{4},
+                .doc = "frames between keys when no `keys` input is connected",
+                .min = 1,
+                .max = 1000},
+      ParamSpec{
+          .name = "freeze",
+          .type = ParamType::String,
+          .default_value = std::string(""),
+          .doc =
+              "regular expression (whole joint name) of joints whose channels must not change; \"\": none"},
+      ParamSpec{.name = "freeze2",
+                .type = ParamType::String,
+                .default_value = std::string(""),
+                .doc = "the same for the second character"},
+      ParamSpec{.name = "strict",
+                .type = ParamType::Bool,
+                .default_value = false,
+                .doc = "fail (a non-zero exit) when the constraints are not met; otherwise the best effort "
+                       "is output and "
+                       "the failure reported (converged = false, message)"},
   };
   return {spec, [](const Params& p) { return std::make_unique<SpacetimeNode>(p); }};
 }

@@ -3,6 +3,8 @@
 // a two-character solve that keeps a hand-hold while one walker shrinks.
 #include <catch2/catch.hpp>
 
+#include <limits>
+
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
@@ -38,7 +40,7 @@ TEST_CASE("holds: pairs of points that stay close, kept at the source distance")
       a, b, {.points_a = {"LeftHand", "RightHand"}, .points_b = {"RightHand"}, .max_distance = 0.45, .hysteresis = 1.0});
   INFO("closest " << d.closest);
   REQUIRE(d.holds.size() == 1);
-  const Hold& h = d.holds.front();
+  const HoldSpan& h = d.holds.front();
   CHECK(d.points_a[static_cast<std::size_t>(h.point_a)].name == "LeftHand");
   CHECK(d.points_b[static_cast<std::size_t>(h.point_b)].name == "RightHand");
   CHECK(d.points_b[static_cast<std::size_t>(h.point_b)].point.character == 1);
@@ -76,6 +78,30 @@ TEST_CASE("holds: bad input") {
   shorter.values.conservativeResize(b.frame_count() - 5, Eigen::NoChange);
   CHECK_THROWS_WITH(detect_holds(a, shorter, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}}),
                     Catch::Contains("differ in length or rate"));
+  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .hysteresis = 0.5}),
+                    Catch::Contains("hysteresis"));
+  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .min_duration_s = -1}),
+                    Catch::Contains("min_duration_s"));
+  motion::Motion broken = b;
+  broken.values(3, 5) = std::numeric_limits<double>::quiet_NaN();
+  CHECK_THROWS(detect_holds(a, broken, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}}));
+}
+
+TEST_CASE("holds: hysteresis keeps a hold through a brief parting; short holds are dropped") {
+  // The close pair's distance swings between about 0 and 0.37 m with the arms.
+  const auto [a, b] = side_by_side(0.5);
+  const HoldOptions tight{.points_a = {"LeftHand"}, .points_b = {"RightHand"}, .max_distance = 0.3, .hysteresis = 1.0};
+  const HoldDetection parted = detect_holds(a, b, tight);
+  REQUIRE(parted.holds.size() >= 2);
+  HoldOptions loose = tight;
+  loose.hysteresis = 1.5;  // leave only beyond 0.45 m: never
+  const HoldDetection kept = detect_holds(a, b, loose);
+  REQUIRE(kept.holds.size() == 1);
+  CHECK(kept.holds.front().first_frame == 0);
+  CHECK(kept.holds.front().last_frame == a.frame_count() - 1);
+  HoldOptions long_only = tight;
+  long_only.min_duration_s = 100;
+  CHECK(detect_holds(a, b, long_only).holds.empty());
 }
 
 TEST_CASE("two walkers in one solve: one shrinks, the hand-hold stays, the other's legs are frozen") {

@@ -80,6 +80,10 @@ struct FootplantDetection {
 PlantPoint find_point(const motion::Skeleton& skeleton, const std::string& spec, int character,
                       const std::string& who = "footplants");
 
+// World positions (metres) of `points` at every frame of `motion`: frame_count() x points.size()
+// entries, frame-major (frame f, point i at f * points.size() + i).
+std::vector<Eigen::Vector3d> point_positions(const motion::Motion& motion, const std::vector<PlantPoint>& points);
+
 // Throws std::invalid_argument for a named joint that does not exist (with the nearest name),
 // when no foot joint is found automatically, or for options out of range.
 FootplantDetection detect_footplants(const motion::Motion& motion, const FootplantOptions& options);

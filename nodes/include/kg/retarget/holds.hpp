@@ -32,7 +32,7 @@ struct HoldOptions {
   double min_duration_s = 0.2;   // shorter spans are dropped
 };
 
-struct Hold {
+struct HoldSpan {
   int point_a = 0, point_b = 0;  // indexes into HoldDetection::points_a / points_b
   int first_frame = 0;           // inclusive
   int last_frame = 0;            // inclusive
@@ -41,13 +41,13 @@ struct Hold {
 
 struct HoldDetection {
   std::vector<PlantPoint> points_a, points_b;  // PointRef::character 0 and 1
-  std::vector<Hold> holds;                     // by pair, then time
+  std::vector<HoldSpan> holds;                     // by pair, then time
   double closest = 0;                          // m, the smallest distance of any pair at any frame
 };
 
 // `a` and `b` must have the same frame count and rate. Throws std::invalid_argument for
-// unknown joints (with the nearest name), empty point lists, mismatched motions or options out
-// of range.
+// unknown joints (with the nearest name), empty point lists, mismatched or malformed motions
+// (non-finite values: Motion::check) or options out of range.
 HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, const HoldOptions& options);
 
 // One `distance` constraint per hold, labelled "<a> ~ <b> hold <n>", sampled at every frame of
