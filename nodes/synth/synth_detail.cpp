@@ -310,18 +310,15 @@ double PoseWriter::write(const BodyPose& pose, double* frame) {
     const Eigen::Vector3d d = foot.ankle - hip;
     const double D = d.norm();
     worst = std::max(worst, D / L);
-    const double Dc = std::clamp(D, std::abs(L1 - L2) + 1e-6 * L, kMaxExtension * L);
     const Eigen::Vector3d u = d / D;
     // The knee points where the foot and the pelvis head, in the plane through hip and ankle.
     Eigen::Vector3d forward = rot_y(foot.yaw) * Eigen::Vector3d::UnitZ();
     Eigen::Vector3d pelvis_forward = pose.pelvis * Eigen::Vector3d::UnitZ();
     pelvis_forward.y() = 0;
     forward += pelvis_forward.normalized();
-    Eigen::Vector3d pole = forward - forward.dot(u) * u;
-    pole.normalize();
-    const double cos_hip = std::clamp((L1 * L1 + Dc * Dc - L2 * L2) / (2 * L1 * Dc), -1.0, 1.0);
-    const double sin_hip = std::sqrt(1 - cos_hip * cos_hip);
-    const Eigen::Vector3d knee = hip + L1 * (cos_hip * u + sin_hip * pole);
+    const Eigen::Vector3d pole = (forward - forward.dot(u) * u).normalized();
+    double Dc = 0;
+    const Eigen::Vector3d knee = two_link_middle(hip, foot.ankle, L1, L2, forward, kMaxExtension, &Dc);
     Eigen::Matrix3d thigh;
     thigh.col(1) = (hip - knee) / L1;
     thigh.col(2) = (pole - pole.dot(thigh.col(1)) * thigh.col(1)).normalized();
