@@ -310,7 +310,10 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
       skid.label = label + " non-skid";
       skid.points = {pt.point, pt.point};
       skid.params = {1, 0, 1};
-      skid.weight = o.weight;
+      // The chain's small per-row residuals add up along a long plant (an actor standing for
+      // seconds): rows weighted by the square root of its length keep the whole plant's drift
+      // as small as one row's.
+      skid.weight = o.weight * std::sqrt(static_cast<double>(p.last_frame - p.first_frame));
       for (int f = p.first_frame; f < p.last_frame; ++f) skid.samples.push_back({.frames = {f, f + 1}});
       set.constraints.push_back(std::move(skid));
     }
