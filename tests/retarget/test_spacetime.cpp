@@ -1,14 +1,15 @@
 // The spacetime solver: the analytic Jacobian against finite differences, the active set, masks,
 // two characters, a contradictory problem reported as such, densifying keys, and the 60% walk.
-// Constraint kinds are small ones of this file, so the solver is tested on its own.
+// Constraints are of the built-in kinds.
 #include <catch2/catch.hpp>
 
 #include <chrono>
 #include <cmath>
-#include <map>
+#include <limits>
 #include <random>
 
 #include "kg/motion/kinematics.hpp"
+#include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -19,119 +20,13 @@ using motion::ChannelKind;
 
 namespace {
 
-// params [x y z]: p - t (3 equality rows).
-class PinKind final : public ConstraintKind {
- public:
-  std::string name() const override { return "pin"; }
-  std::string doc() const override { return "test: a point at a place"; }
-  void check(const Constraint& c) const override {
-    if (c.points.size() != 1 || c.params.size() != 3) throw std::invalid_argument("pin '" + c.label + "': shape");
-  }
-  int rows(const Constraint&) const override { return 3; }
-  bool is_inequality(const Constraint&, int) const override { return false; }
-  void evaluate(const Constraint&, std::span<const double> params, std::span<const Eigen::Vector3d> points,
-                std::span<const double>, Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> dp,
-                Eigen::Ref<Eigen::MatrixXd>) const override {
-    for (int i = 0; i < 3; ++i) {
-      r[i] = points[0][i] - params[static_cast<std::size_t>(i)];
-      dp(i, i) = 1;
-    }
-  }
-};
+constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// params [h]: y - h >= 0.
-class FloorKind final : public ConstraintKind {
- public:
-  std::string name() const override { return "floor"; }
-  std::string doc() const override { return "test: above a height"; }
-  void check(const Constraint& c) const override {
-    if (c.points.size() != 1 || c.params.size() != 1) throw std::invalid_argument("floor: shape");
-  }
-  int rows(const Constraint&) const override { return 1; }
-  bool is_inequality(const Constraint&, int) const override { return true; }
-  void evaluate(const Constraint&, std::span<const double> params, std::span<const Eigen::Vector3d> points,
-                std::span<const double>, Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> dp,
-                Eigen::Ref<Eigen::MatrixXd>) const override {
-    r[0] = points[0].y() - params[0];
-    dp(0, 1) = 1;
-  }
-};
-
-// points [p, q], params [d]: |p - q| - d.
-class GapKind final : public ConstraintKind {
- public:
-  std::string name() const override { return "gap"; }
-  std::string doc() const override { return "test: two points a distance apart"; }
-  void check(const Constraint& c) const override {
-    if (c.points.size() != 2 || c.params.size() != 1) throw std::invalid_argument("gap: shape");
-  }
-  int rows(const Constraint&) const override { return 1; }
-  bool is_inequality(const Constraint&, int) const override { return false; }
-  void evaluate(const Constraint&, std::span<const double> params, std::span<const Eigen::Vector3d> points,
-                std::span<const double>, Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> dp,
-                Eigen::Ref<Eigen::MatrixXd>) const override {
-    const Eigen::Vector3d v = points[0] - points[1];
-    const double n = v.norm();
-    r[0] = n - params[0];
-    dp.block<1, 3>(0, 0) = v.transpose() / n;
-    dp.block<1, 3>(0, 3) = -v.transpose() / n;
-  }
-};
-
-// points [p, p] at two frames: p(f1) - p(f0) (non-skid).
-class StayKind final : public ConstraintKind {
- public:
-  std::string name() const override { return "stay"; }
-  std::string doc() const override { return "test: same place at two times"; }
-  void check(const Constraint& c) const override {
-    if (c.points.size() != 2) throw std::invalid_argument("stay: shape");
-  }
-  int rows(const Constraint&) const override { return 3; }
-  bool is_inequality(const Constraint&, int) const override { return false; }
-  void evaluate(const Constraint&, std::span<const double>, std::span<const Eigen::Vector3d> points,
-                std::span<const double>, Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> dp,
-                Eigen::Ref<Eigen::MatrixXd>) const override {
-    for (int i = 0; i < 3; ++i) {
-      r[i] = points[1][i] - points[0][i];
-      dp(i, 3 + i) = 1;
-      dp(i, i) = -1;
-    }
-  }
-};
-
-// channels [c], params [min, max]: v - min >= 0, max - v >= 0.
-class RangeKind final : public ConstraintKind {
- public:
-  std::string name() const override { return "range"; }
-  std::string doc() const override { return "test: a channel in a range"; }
-  void check(const Constraint& c) const override {
-    if (c.channels.size() != 1 || c.params.size() != 2) throw std::invalid_argument("range: shape");
-  }
-  int rows(const Constraint&) const override { return 2; }
-  bool is_inequality(const Constraint&, int) const override { return true; }
-  void evaluate(const Constraint&, std::span<const double> params, std::span<const Eigen::Vector3d>,
-                std::span<const double> values, Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd>,
-                Eigen::Ref<Eigen::MatrixXd> dv) const override {
-    r[0] = values[0] - params[0];
-    r[1] = params[1] - values[0];
-    dv(0, 0) = 1;
-    dv(1, 0) = -1;
-  }
-};
-
-const PinKind kPin;
-const FloorKind kFloor;
-const GapKind kGap;
-const StayKind kStay;
-const RangeKind kRange;
-
-KindFinder test_kinds() {
-  return [](const std::string& name) -> const ConstraintKind* {
-    static const std::map<std::string, const ConstraintKind*> kinds{
-        {"pin", &kPin}, {"floor", &kFloor}, {"gap", &kGap}, {"stay", &kStay}, {"range", &kRange}};
-    auto it = kinds.find(name);
-    return it == kinds.end() ? nullptr : it->second;
-  };
+// The built-in kinds (constraint_kinds.hpp): position, region "above" a height, distance,
+// same_place and parameter_range are what these tests need.
+KindFinder builtin_kinds() {
+  static const ConstraintKindTable table = ConstraintKindTable::builtin();
+  return [](const std::string& name) { return table.find(name); };
 }
 
 // A three-segment arm hanging from a free root: 6 + 3 + 2 channels.
@@ -178,7 +73,7 @@ Eigen::Vector3d world_point(const motion::Motion& m, int frame, int joint, const
 
 Constraint pin(const std::string& label, int joint, const Eigen::Vector3d& local, const Eigen::Vector3d& at,
                std::vector<int> frames, int character = 0) {
-  Constraint c{.kind = "pin", .label = label, .points = {{character, joint, local}}, .params = {at.x(), at.y(), at.z()}};
+  Constraint c{.kind = "position", .label = label, .points = {{character, joint, local}}, .params = {at.x(), at.y(), at.z()}};
   for (int f : frames) c.samples.push_back({{f}});
   return c;
 }
@@ -199,21 +94,21 @@ TEST_CASE("spacetime: analytic Jacobian of the whole problem matches finite diff
   problem.characters.push_back({.initial = swing(arm2, frames, 0.7)});
   ConstraintSet set;
   set.constraints.push_back(pin("hand", 2, kHand, {0.3, 0.2, 0.1}, {2, 5, 12}));
-  Constraint floor{.kind = "floor", .label = "elbow above", .points = {{0, 1, {0, 0, 0}}}, .params = {0.9}};
+  Constraint floor{.kind = "region", .label = "elbow above", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, 0.9, -kInf, kInf, kInf, kInf}};
   for (int f = 0; f < frames; ++f) floor.samples.push_back({{f}});
   set.constraints.push_back(floor);
-  Constraint gap{.kind = "gap", .label = "hold", .points = {{0, 2, kHand}, {1, 2, kHand}}, .params = {0.5}, .weight = 2};
+  Constraint gap{.kind = "distance", .label = "hold", .points = {{0, 2, kHand}, {1, 2, kHand}}, .params = {0.5}, .weight = 2};
   gap.samples.push_back({{4, 4}});
   gap.samples.push_back({{7, 9}});
   set.constraints.push_back(gap);
-  Constraint stay{.kind = "stay", .label = "plant", .points = {{1, 2, kHand}, {1, 2, kHand}}};
+  Constraint stay{.kind = "same_place", .label = "plant", .points = {{1, 2, kHand}, {1, 2, kHand}}};
   stay.samples.push_back({{1, 11}});
   set.constraints.push_back(stay);
-  Constraint range{.kind = "range", .label = "elbow limit", .channels = {{0, 9}}, .params = {0.0, 0.5}};
+  Constraint range{.kind = "parameter_range", .label = "elbow limit", .channels = {{0, 9}}, .params = {0.0, 0.5}};
   for (int f = 0; f < frames; ++f) range.samples.push_back({{f}});
   set.constraints.push_back(range);
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
 
   std::vector<DisplacementLayout> layouts = spacetime_layouts(problem);
@@ -250,13 +145,13 @@ TEST_CASE("spacetime: the active set takes violated inequality rows in and lets 
   const motion::Motion m1 = swing(arm, frames);
   ConstraintSet set;
   // Elbow height runs about 0.7 m: a floor at 0.5 is satisfied everywhere and must change nothing.
-  Constraint low{.kind = "floor", .label = "low floor", .points = {{0, 1, {0, 0, 0}}}, .params = {0.5}};
+  Constraint low{.kind = "region", .label = "low floor", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, 0.5, -kInf, kInf, kInf, kInf}};
   for (int f = 0; f < frames; ++f) low.samples.push_back({{f}});
   set.constraints.push_back(low);
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   SpacetimeResult r0 = solve_spacetime(problem);
   CHECK(r0.converged());
@@ -267,7 +162,7 @@ TEST_CASE("spacetime: the active set takes violated inequality rows in and lets 
   // The hand pinned 10 cm above a floor its elbow must stay over; the elbow starts below the
   // floor at the pinned frames (rows enter), ends above it (they leave).
   const double elbow_y = world_point(m1, 15, 1, Eigen::Vector3d::Zero()).y();
-  Constraint high{.kind = "floor", .label = "high floor", .points = {{0, 1, {0, 0, 0}}}, .params = {elbow_y + 0.05}};
+  Constraint high{.kind = "region", .label = "high floor", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, elbow_y + 0.05, -kInf, kInf, kInf, kInf}};
   for (int f = 10; f <= 20; ++f) high.samples.push_back({{f}});
   set.constraints = {high};
   const Eigen::Vector3d hand = world_point(m1, 15, 2, kHand);
@@ -276,8 +171,8 @@ TEST_CASE("spacetime: the active set takes violated inequality rows in and lets 
   INFO(r.message);
   REQUIRE(r.converged());
   REQUIRE(r.kinds.size() == 2);
-  const KindReport& fl = r.kinds[0];
-  CHECK(fl.kind == "floor");
+  const KindReport& fl = r.kinds[1];  // sorted by name: position, region
+  CHECK(fl.kind == "region");
   CHECK(fl.rows == 11);
   CHECK(fl.worst_inequality <= 1e-4);
   for (int f = 10; f <= 20; ++f)
@@ -300,7 +195,7 @@ TEST_CASE("spacetime: a mask freezes channels exactly", "[spacetime]") {
   for (int c = 6; c <= 10; ++c) frozen[static_cast<std::size_t>(c)] = false;  // only the arm's joints move
   problem.characters.push_back({.initial = m1, .frozen = frozen});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   SpacetimeResult r = solve_spacetime(problem);
   INFO(r.message);
@@ -318,7 +213,7 @@ TEST_CASE("spacetime: two characters held a distance apart, one partly frozen", 
   motion::Motion mb = swing(b, frames, 1.0);
   for (int f = 0; f < frames; ++f) mb.values(f, 0) += 0.6;  // side by side
   ConstraintSet set;
-  Constraint hold{.kind = "gap", .label = "hand-hold", .points = {{0, 2, kHand}, {1, 2, kHand * 0.7}}, .params = {0.15}};
+  Constraint hold{.kind = "distance", .label = "hand-hold", .points = {{0, 2, kHand}, {1, 2, kHand * 0.7}}, .params = {0.15}};
   for (int f = 5; f < 35; ++f) hold.samples.push_back({{f, f}});
   set.constraints.push_back(hold);
   SpacetimeProblem problem;
@@ -327,7 +222,7 @@ TEST_CASE("spacetime: two characters held a distance apart, one partly frozen", 
   problem.characters.push_back({.initial = ma});
   problem.characters.push_back({.initial = mb, .frozen = frozen_b});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   SpacetimeResult r = solve_spacetime(problem);
   INFO(r.message);
@@ -354,7 +249,7 @@ TEST_CASE("spacetime: a contradictory problem is reported as not converged, with
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   problem.options.max_iterations = 15;
   SpacetimeResult r = solve_spacetime(problem);
@@ -380,7 +275,7 @@ TEST_CASE("spacetime: denser keys on retry meet what the first spacing cannot", 
   // The hand must follow its own path shifted by 3 cm up and down every 2 frames: a frequency
   // far above what keys every 8 frames can carry, within reach of keys every 2.
   ConstraintSet set;
-  Constraint zig{.kind = "pin", .label = "zigzag", .points = {{0, 2, kHand}}, .params = {0, 0, 0}};
+  Constraint zig{.kind = "position", .label = "zigzag", .points = {{0, 2, kHand}}, .params = {0, 0, 0}};
   for (int f = 0; f < frames; f += 2) {
     const Eigen::Vector3d p = world_point(m1, f, 2, kHand) + Eigen::Vector3d(0, (f / 2) % 2 ? 0.03 : -0.03, 0);
     zig.samples.push_back({{f}, {p.x(), p.y(), p.z()}});
@@ -389,7 +284,7 @@ TEST_CASE("spacetime: denser keys on retry meet what the first spacing cannot", 
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1, .frames_per_key = std::vector<int>(11, 8)});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   problem.options.densify = false;
   SpacetimeResult once = solve_spacetime(problem);
@@ -412,7 +307,7 @@ TEST_CASE("spacetime: malformed problems throw with the constraint named", "[spa
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   auto message = [&]() -> std::string {
     try {
@@ -467,14 +362,14 @@ TEST_CASE("spacetime: a synthesized walk retargeted to 60% with short legs", "[s
   for (int s = 0; s < 2; ++s)
     for (const auto& [joint, local] : {std::pair{walk.figure.foot[static_cast<std::size_t>(s)], walk.figure.heel_local},
                                        std::pair{walk.figure.toe[static_cast<std::size_t>(s)], walk.figure.toe_tip_local}}) {
-      Constraint c{.kind = "floor", .label = "above floor", .points = {{0, joint, local * scale}}, .params = {0.0}};
+      Constraint c{.kind = "region", .label = "above floor", .points = {{0, joint, local * scale}}, .params = {-kInf, 0.0, -kInf, kInf, kInf, kInf}};
       for (int f = 0; f < src.frame_count(); ++f) c.samples.push_back({{f}});
       set.constraints.push_back(c);
     }
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   // The scaled motion violates the plants by centimetres.
   problem.options.max_iterations = 0;
@@ -543,13 +438,13 @@ TEST_CASE("spacetime: a two-frame row far apart (non-skid over a long span) is s
   ConstraintSet set;
   // The hand at frames 5, 10, ..., 35 must be where it is at frame 0: rows 35 frames apart
   // widen the band to span them.
-  Constraint stay{.kind = "stay", .label = "hand stays", .points = {{0, 2, kHand}, {0, 2, kHand}}};
+  Constraint stay{.kind = "same_place", .label = "hand stays", .points = {{0, 2, kHand}, {0, 2, kHand}}};
   for (int f = 5; f < frames; f += 5) stay.samples.push_back({{0, f}});
   set.constraints.push_back(stay);
   SpacetimeProblem problem;
   problem.characters.push_back({.initial = m1});
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   SpacetimeResult r = solve_spacetime(problem);
   INFO(r.message);
@@ -576,7 +471,7 @@ TEST_CASE("spacetime: a morphing character is solved on each frame's own skeleto
   for (int f = 10; f <= 25; ++f) held.push_back(f);
   set.constraints.push_back(pin("hold", 2, kHand, at, held));
   problem.constraints = &set;
-  problem.kinds = test_kinds();
+  problem.kinds = builtin_kinds();
   problem.options.equality_tolerance = problem.options.inequality_tolerance = 1e-5;
   SpacetimeResult r = solve_spacetime(problem);
   INFO(r.message);
