@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 
+#include "../support/node_context.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/synth/synthesize.hpp"
@@ -289,26 +290,6 @@ class HeightKind final : public ConstraintKind {
   }
 };
 
-// A RunContext whose only interesting answer is find_extension (through a registry).
-class RegistryContext final : public graph::RunContext {
- public:
-  explicit RegistryContext(const graph::Registry& r) : registry_(r) {}
-  const std::string& node_id() const override { return id_; }
-  const graph::Params& params() const override { return params_; }
-  const graph::Value& input_value(const std::string&) const override { return none_; }
-  void set_output(const std::string&, graph::Value) override {}
-  void report(const std::string&, graph::Figure) override {}
-  void log(const std::string&) override {}
-  std::shared_ptr<const void> find_extension(const std::string& interface, const std::string& name) const override {
-    return registry_.find_extension(interface, name);
-  }
-
- private:
-  const graph::Registry& registry_;
-  std::string id_ = "test";
-  graph::Params params_;
-  graph::Value none_;
-};
 }  // namespace
 
 TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknown kinds") {
@@ -356,7 +337,8 @@ TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknow
     const ConstraintKindTable a = kinds_for(set, registry);
     REQUIRE(a.find("test.height") != nullptr);
     CHECK(a.names().size() == 8);
-    RegistryContext ctx(registry);
+    test::NodeContext ctx;
+    ctx.registry = &registry;
     const ConstraintKindTable b = kinds_for(set, ctx);
     const ConstraintKind* h = b.find("test.height");
     REQUIRE(h != nullptr);
