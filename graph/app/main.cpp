@@ -76,13 +76,13 @@ void load_plugins(Host& host, const Options& o, const fs::path& prefix) {
 }
 
 void load_graph_plugins(Host& host, const Options& o) {
-  std::vector<std::string> entries;
+  std::vector<graph::PluginEntry> entries;
   try {
     entries = graph::read_graph_plugins(o.graph, o.sets);
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   }
-  for (const std::string& entry : entries) {
+  for (const auto& [entry, where] : entries) {
     try {
       const fs::path path = graph::PluginLoader::resolve(entry, o.graph.parent_path(), host.search_dirs);
       if (fs::is_directory(path)) {
@@ -91,7 +91,7 @@ void load_graph_plugins(Host& host, const Options& o) {
         host.loader.load_file(path);
       }
     } catch (const std::exception& e) {
-      throw Failure{kExitPlugin, o.graph.string() + ": plugins: " + e.what()};
+      throw Failure{kExitPlugin, where.to_string() + ": plugins: " + e.what()};
     }
   }
 }

@@ -284,7 +284,7 @@ struct Head {
   YAML::Node root;
   std::vector<Entry> top;
   std::string doc;
-  std::vector<std::string> plugins;
+  std::vector<PluginEntry> plugins;
 };
 
 std::optional<bool> parse_bool(std::string text) {
@@ -371,7 +371,7 @@ Head read_head(const Loader& L, Variables& vars, const std::string& text,
         L.fail(in_quotes(path) + " must be a plugin name or path, got " + kind_of(item), L.at(item));
       std::string entry = vars.substitute(item.Scalar(), L.at(item));
       // An entry that is empty after substitution is an optional plugin left out.
-      if (!detail::trim(entry).empty()) h.plugins.push_back(std::move(entry));
+      if (!detail::trim(entry).empty()) h.plugins.push_back({std::move(entry), L.at(item)});
     }
   }
   return h;
@@ -641,7 +641,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
   g.doc = head.doc;
   g.variables = vars.declared();
   g.values = vars.values();
-  g.plugins = head.plugins;
+  for (const PluginEntry& p : head.plugins) g.plugins.push_back(p.entry);
 
   // Nodes, their types and params.
   const Entry* nodes = Loader::find(head.top, "nodes");
@@ -835,7 +835,7 @@ std::string read_text(const fs::path& file) {
 
 }  // namespace
 
-std::vector<std::string> read_graph_plugins(const fs::path& file,
+std::vector<PluginEntry> read_graph_plugins(const fs::path& file,
                                             const std::map<std::string, std::string>& overrides) {
   const std::string text = read_text(file);
   Loader L(file.string());

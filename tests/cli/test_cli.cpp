@@ -3,6 +3,7 @@
 // exit codes, messages on stderr with file:line, --report JSON, nodes --json, dot, --set.
 // The CLI loads the built-in node module (lib/kinegraph/kg_builtin_nodes.so) first; it must be
 // built for these tests to pass (test_cli depends on it).
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -431,13 +432,16 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
   }
   SECTION("a plugin the graph names but cannot be found: exit 4") {
     std::string text = kSumGraph;
-    text.insert(text.find("nodes:\n"), "plugins: [no_such_plugin]\n");
+    const std::size_t at = text.find("nodes:\n");
+    text.insert(at, "plugins: [no_such_plugin]\n");
+    const auto line = std::count(text.begin(), text.begin() + static_cast<std::ptrdiff_t>(at), '\n') + 1;
     const fs::path g = dir.write("missing.yaml", text);
     const Result r = kinegraph(with_plugins({"run", g.string(), "--set", "out=" + out.string()}));
     INFO(show(r));
     CHECK(r.code == 4);
-    CHECK_THAT(r.err, Contains("missing.yaml: plugins: plugin 'no_such_plugin' not found; looked for " +
-                               (kTestPlugins / "no_such_plugin.so").string()));
+    // The entry's own line and column.
+    CHECK_THAT(r.err, Contains("missing.yaml:" + std::to_string(line) + ":11: plugins: plugin 'no_such_plugin' not found; "
+                               "looked for " + (kTestPlugins / "no_such_plugin.so").string()));
     CHECK_FALSE(fs::exists(out));
   }
   SECTION("a bad plugin the graph names: exit 4") {

@@ -227,7 +227,14 @@ nodes:
 
 TEST_CASE("read_graph_plugins reads plugins without knowing node types") {
   const auto plugins = read_graph_plugins(kData / "v1_plugins.yaml", {{"plugin_dir", "/opt/kg"}});
-  CHECK(plugins == std::vector<std::string>{"kg_lowpass", "/opt/kg/libextra.so", "relative/dir"});
+  REQUIRE(plugins.size() == 3);
+  std::vector<std::string> entries;
+  for (const PluginEntry& p : plugins) entries.push_back(p.entry);
+  CHECK(entries == std::vector<std::string>{"kg_lowpass", "/opt/kg/libextra.so", "relative/dir"});
+  // Each with where it is written, for messages about it.
+  CHECK(plugins[0].where.to_string().find("v1_plugins.yaml:7:5") != std::string::npos);
+  CHECK(plugins[1].where.line == 8);
+  CHECK(plugins[2].where.line == 9);
   CHECK_THROWS_WITH(read_graph_plugins(kData / "v1_plugins.yaml", {}),
                     Catch::Contains("v1_plugins.yaml:5:3: variable 'plugin_dir' is required"));
   // Loading it for real needs its node types.

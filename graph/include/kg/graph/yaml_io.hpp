@@ -30,9 +30,15 @@ namespace kg::graph {
 
 inline constexpr int kGraphFormatVersion = 1;
 
+// One `plugins:` entry of a graph file, variables substituted, and where it is written.
+struct PluginEntry {
+  std::string entry;
+  SourceLocation where;
+};
+
 // Reads the `plugins:` entries of a graph file (after substituting variables) without needing
 // its node types: the CLI loads them before load_graph. Throws Error as load_graph does.
-std::vector<std::string> read_graph_plugins(const std::filesystem::path& file,
+std::vector<PluginEntry> read_graph_plugins(const std::filesystem::path& file,
                                             const std::map<std::string, std::string>& overrides);
 
 // Loads and validates. `overrides` are --set values; one naming no declared variable is an
