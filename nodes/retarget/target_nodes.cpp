@@ -248,7 +248,7 @@ NodeType key_spacing_type() {
       "`threshold`; or set by hand, for all channels or per group of joints.";
   spec.inputs = {{"motion", "kg.Motion", true, "the source clip"}};
   spec.outputs = {{"keys", "kg.KeySpacing", true, "frames per key for every channel, and why"}};
-  ParamSpec threshold{"threshold", ParamType::Float, 0.05,
+  ParamSpec threshold{"threshold", ParamType::Float, 0.1,
                       "fraction of the band energy a level must exceed to set the spacing"};
   threshold.min = 1e-6;
   threshold.max = 0.999;
