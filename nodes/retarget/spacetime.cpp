@@ -1045,12 +1045,12 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
       const bool worst_stuck = worst_now > 0.99 * worst_before;
       worst_before = worst_now;
       worst_history.push_back(worst_now);
-      // With denser keys to come, a pass whose worst violation gained under 2% over its last
-      // three iterations has done what its spacing can (the rest is the objective creeping
+      // With denser keys to come, a pass whose worst violation gained under 5% over its last
+      // two iterations has done what its spacing can (the rest is the objective creeping
       // down): the next pass starts from here.
-      constexpr std::size_t kStallWindow = 3;
+      constexpr std::size_t kStallWindow = 2;
       if (can_densify && worst_history.size() > kStallWindow &&
-          worst_now > 0.98 * worst_history[worst_history.size() - 1 - kStallWindow]) {
+          worst_now > 0.95 * worst_history[worst_history.size() - 1 - kStallWindow]) {
         stop = "keys too far apart";
         break;
       }
