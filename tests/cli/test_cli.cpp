@@ -31,9 +31,7 @@ const fs::path kKinegraph = fs::path(KG_BINARY_DIR) / "bin" / "kinegraph";
 const fs::path kTestPlugins = KG_TEST_PLUGIN_DIR;
 const fs::path kBadPlugins = fs::path(KG_TEST_PLUGIN_DIR) / "bad";
 
-Result kinegraph(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
-  return run_program(kKinegraph, args, env);
-}
+using kg::test::kinegraph;
 
 
 // constant a (2) and constant b (${b}) -> add -> print to ${out}; line numbers matter below.

@@ -26,9 +26,7 @@ using kg::test::TempDir;
 const fs::path kSource = KG_SOURCE_DIR;
 const fs::path kData = KG_DATA_DIR;
 
-Result kinegraph(const std::vector<std::string>& args) {
-  return kg::test::run_program(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph", args);
-}
+using kg::test::kinegraph;
 
 // Every motion clip in the data folder: .bvh files, and .amc files (their .asf is guessed).
 std::vector<fs::path> data_clips() {

@@ -33,9 +33,7 @@ const fs::path kSource = KG_SOURCE_DIR;
 const fs::path kGraph = kSource / "graphs/ladder.yaml";
 const fs::path kConstraints = kSource / "graphs/ladder/climb_constraints.yaml";
 
-Result kinegraph(const std::vector<std::string>& args) {
-  return kg::test::run_program(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph", args);
-}
+using kg::test::kinegraph;
 
 // The climb graphs/ladder.yaml synthesizes (its `climb` node's params), and the margin its rung
 // constraints keep a foot from either rail.

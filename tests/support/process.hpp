@@ -82,4 +82,9 @@ inline std::string show(const Result& r) {
   return "exit " + std::to_string(r.code) + "\nstdout:\n" + r.out + "\nstderr:\n" + r.err;
 }
 
+// Runs the built kinegraph CLI (KG_BINARY_DIR/bin/kinegraph), as run_program does.
+inline Result kinegraph(const std::vector<std::string>& args, const std::vector<std::string>& env = {}) {
+  return run_program(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph", args, env);
+}
+
 }  // namespace kg::test

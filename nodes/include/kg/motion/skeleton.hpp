@@ -46,10 +46,10 @@ struct Joint {
   int parent = -1;                                    // index of the parent joint, -1 for a root
   Eigen::Vector3d offset = Eigen::Vector3d::Zero();   // metres, in the parent's frame
   Eigen::Matrix3d axis = Eigen::Matrix3d::Identity(); // ASF `axis`: the frame channels rotate in
-  std::vector<Channel> channels;
+  std::vector<Channel> channels{};
   int first_channel = 0;                              // index of channels[0] in a frame's values
   // Tips: BVH "End Site" offsets (metres, this joint's frame). Usually zero or one.
-  std::vector<Eigen::Vector3d> end_sites;
+  std::vector<Eigen::Vector3d> end_sites{};
 };
 
 class Skeleton {
