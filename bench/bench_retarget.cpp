@@ -17,6 +17,9 @@
 #include <stdexcept>
 
 #include <Eigen/SparseCholesky>
+#ifdef KG_HAVE_CERES
+#include <ceres/ceres.h>
+#endif
 
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -244,6 +247,137 @@ void compare_linear_algebra(int n, int b) {
               n, b, t_band * 1000, t_llt * 1000, t_analyze * 1000, (y - z).cwiseAbs().maxCoeff());
 }
 
+#ifdef KG_HAVE_CERES
+// One row of the problem linearised at x0: r(x) = r0 + sum over the control-time blocks it
+// touches of J_b x_b (weighted, as the solver sees it).
+class LinearRow final : public ceres::CostFunction {
+ public:
+  LinearRow(double r0, std::vector<Eigen::RowVectorXd> blocks) : r0_(r0), blocks_(std::move(blocks)) {
+    set_num_residuals(1);
+    for (const Eigen::RowVectorXd& b : blocks_) mutable_parameter_block_sizes()->push_back(static_cast<int>(b.size()));
+  }
+  bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
+    double v = r0_;
+    for (std::size_t b = 0; b < blocks_.size(); ++b) {
+      v += blocks_[b].dot(Eigen::Map<const Eigen::VectorXd>(x[b], blocks_[b].size()));
+      if (jacobians && jacobians[b]) Eigen::Map<Eigen::RowVectorXd>(jacobians[b], blocks_[b].size()) = blocks_[b];
+    }
+    r[0] = v;
+    return true;
+  }
+
+ private:
+  double r0_;
+  std::vector<Eigen::RowVectorXd> blocks_;
+};
+
+// The damping sqrt(eps M) x of one control-time block.
+class Damping final : public ceres::CostFunction {
+ public:
+  explicit Damping(Eigen::VectorXd scale) : scale_(std::move(scale)) {
+    set_num_residuals(static_cast<int>(scale_.size()));
+    mutable_parameter_block_sizes()->push_back(static_cast<int>(scale_.size()));
+  }
+  bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
+    const auto n = scale_.size();
+    Eigen::Map<Eigen::VectorXd>(r, n) = scale_.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(x[0], n));
+    if (jacobians && jacobians[0]) {
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobians[0], n, n);
+      J.setZero();
+      J.diagonal() = scale_;
+    }
+    return true;
+  }
+
+ private:
+  Eigen::VectorXd scale_;
+};
+
+// The issue asks which linear algebra serves best. Ceres' generic sparse normal Cholesky
+// (SuiteSparse) on exactly the rows our first Gauss-Newton step solves (the problem linearised
+// at the initial estimate, its active rows, the same damping), one thread, against our whole
+// solve's time per iteration on the same problem. Ceres only solves here: its residuals are
+// stored linear rows, so its figure is a lower bound on what a Ceres-based solver would take.
+void compare_with_ceres(const Case& c, const ConstraintKindTable& table) {
+  SpacetimeProblem problem;
+  problem.characters.push_back({.initial = c.m1, .frames_per_key = c.frames_per_key});
+  problem.constraints = &c.set;
+  problem.kinds = [&](const std::string& n) { return table.find(n); };
+  const DisplacementLayout layout = spacetime_layouts(problem).front();
+  const int channels = c.m1.skeleton->channel_count();
+  const int controls = layout.control_count(0);
+  for (int ch = 1; ch < channels; ++ch)
+    if (layout.control_count(ch) != controls) {
+      std::printf("  (Ceres comparison needs one key spacing for all channels)\n");
+      return;
+    }
+  const Eigen::VectorXd x0 = Eigen::VectorXd::Zero(layout.unknown_count());
+  const SpacetimeLinearization lin = linearize_spacetime(problem, x0);
+  const Eigen::VectorXd sensitivity = channel_sensitivity(*c.m1.skeleton);
+  const double epsilon = SpacetimeOptions{}.epsilon;
+  SpacetimeResult ours;
+  double best = 1e30;
+  for (int i = 0; i < 3; ++i) {
+    const double t0 = now();
+    ours = solve_spacetime(problem);
+    best = std::min(best, now() - t0);
+  }
+  std::printf("  ours: %.1f ms per iteration over the whole solve (FK, analytic Jacobians, assembly, banded Cholesky, "
+              "line search)\n",
+              1000 * best / std::max(1, ours.iterations));
+  // Parameter blocks of `width` channels at one control time: every channel (66: Ceres sees the
+  // band's dense blocks) or one (Ceres sees every zero).
+  for (const int width : {channels, 1}) {
+    const int groups = (channels + width - 1) / width;
+    std::vector<Eigen::VectorXd> x(static_cast<std::size_t>(controls * groups));
+    auto block_of = [&](int control, int group) -> Eigen::VectorXd& {
+      return x[static_cast<std::size_t>(control * groups + group)];
+    };
+    ceres::Problem ceres_problem;
+    for (int b = 0; b < controls; ++b)
+      for (int g = 0; g < groups; ++g) {
+        const int first = g * width, n = std::min(width, channels - first);
+        block_of(b, g) = Eigen::VectorXd::Zero(n);
+        Eigen::VectorXd scale(n);
+        for (int k = 0; k < n; ++k) scale[k] = std::sqrt(epsilon * sensitivity[first + k]);
+        ceres_problem.AddResidualBlock(new Damping(scale), nullptr, block_of(b, g).data());
+      }
+    int rows = 0;
+    for (Eigen::Index i = 0; i < lin.residual.size(); ++i) {
+      if (lin.inequality[static_cast<std::size_t>(i)] && lin.residual[i] >= 0) continue;  // inactive
+      std::vector<Eigen::RowVectorXd> row_blocks;
+      std::vector<double*> params;
+      for (int b = 0; b < controls; ++b)
+        for (int g = 0; g < groups; ++g) {
+          const int first = g * width, n = std::min(width, channels - first);
+          Eigen::RowVectorXd jb(n);
+          for (int k = 0; k < n; ++k) jb[k] = lin.jacobian(i, layout.unknown(first + k, b));
+          if (jb.isZero(0)) continue;
+          row_blocks.push_back(jb);
+          params.push_back(block_of(b, g).data());
+        }
+      if (params.empty()) continue;
+      ceres_problem.AddResidualBlock(new LinearRow(lin.residual[i], std::move(row_blocks)), nullptr, params);
+      ++rows;
+    }
+    ceres::Solver::Options options;
+    options.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
+    options.num_threads = 1;
+    options.max_num_iterations = 5;
+    options.function_tolerance = options.gradient_tolerance = options.parameter_tolerance = 1e-16;
+    ceres::Solver::Summary summary;
+    ceres::Solve(options, &ceres_problem, &summary);
+    const int iterations = std::max<int>(1, static_cast<int>(summary.iterations.size()) - 1);
+    std::printf("  Ceres %s SPARSE_NORMAL_CHOLESKY (%s), 1 thread, %d active rows, %d unknowns in blocks of %d: "
+                "%.1f ms per iteration (linear solver %.1f ms)\n",
+                CERES_VERSION_STRING,
+                summary.sparse_linear_algebra_library_type == ceres::SUITE_SPARSE ? "SuiteSparse" : "other", rows,
+                layout.unknown_count(), width, 1000 * summary.minimizer_time_in_seconds / iterations,
+                1000 * summary.linear_solver_time_in_seconds / iterations);
+  }
+}
+#endif
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -251,7 +385,11 @@ int main(int argc, char** argv) {
   const ConstraintKindTable table = ConstraintKindTable::builtin();
   std::printf("== synthesized walk, 30 Hz, to 60%% (thighs and shanks 51%%): fixed plants, floor, joint limits ==\n");
   // ~112 frames: 5 steps.
-  run(synth_case(5, 0.85, "synth walk 60%, short legs"), table, 5);
+  const Case short_legs = synth_case(5, 0.85, "synth walk 60%, short legs");
+  run(short_legs, table, 5);
+#ifdef KG_HAVE_CERES
+  if (!g_only) compare_with_ceres(short_legs, table);
+#endif
   run(synth_case(5, 1.0, "synth walk 60% uniform (m1 already exact)"), table, 5);
   run(synth_case(56, 0.85, "synth walk 60%, short legs, long"), table, 2);
 
