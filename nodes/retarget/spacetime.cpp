@@ -163,6 +163,43 @@ class Pass {
   double step(const Eigen::VectorXd& x, Eigen::VectorXd& dx, double lambda) {
     assemble(x);
     for (int i = 0; i < band_.size(); ++i) band_.at(i, i) += lambda * band_sensitivity_[static_cast<std::size_t>(i)];
+    save_matrix();
+    return solve_step(x, dx, lambda);
+  }
+
+  // The step again after hold_blocking added rows and evaluate(x, true) gave their derivatives,
+  // same x and lambda: the last step's matrix plus the new rows (satisfied at x, so they add to
+  // the matrix only), refactored, without assembling everything again. A full step when a new
+  // row touches a channel the band does not hold.
+  double step_with_held(const Eigen::VectorXd& x, Eigen::VectorXd& dx, double lambda) {
+    if (!saved_valid_) return step(x, dx, lambda);
+    band_ = saved_band_;
+    grad_ = saved_grad_;
+    if (static_cast<int>(local_column_.size()) != band_.size())
+      local_column_.assign(static_cast<std::size_t>(band_.size()), -1);
+    auto fresh = [&](int row) {
+      const auto k = static_cast<std::size_t>(row);
+      return held_[k] && !held_at_save_[k] && active_[k];
+    };
+    for (const SampleInfo& s : samples_) {
+      bool any = false;
+      for (int r = 0; r < s.rows && !any; ++r) any = fresh(s.row_offset + r);
+      if (any && !add_rows(s, fresh)) return step(x, dx, lambda);
+    }
+    save_matrix();
+    return solve_step(x, dx, lambda);
+  }
+
+  void save_matrix() {
+    saved_band_ = band_;
+    saved_grad_ = grad_;
+    held_at_save_ = held_;
+    saved_valid_ = true;
+  }
+
+  // Factors the band and solves; channels outside it get eps M dx = -eps M x. Returns the
+  // directional derivative of F along dx.
+  double solve_step(const Eigen::VectorXd& x, Eigen::VectorXd& dx, double lambda) {
     dx.setZero(x_size_);
     double slope = 0;
     // Free channels no active row touches: eps M dx = -eps M x.
@@ -428,6 +465,73 @@ class Pass {
     return band_index_[static_cast<std::size_t>(ch.x_offset + ch.layout.unknown(c, control))];
   }
 
+  // Adds rows of one sample (those `take` selects, by row index) to the band and the gradient:
+  // the rows over the union of the controls they touch (a control weighed by two frames' bases
+  // counted once), their small dense normal block formed at once, then scattered. False, adding
+  // nothing, when a row touches a control the band does not hold.
+  template <class Take>
+  bool add_rows(const SampleInfo& s, Take take) {
+    const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+    int taken = 0;
+    for (int r = 0; r < s.rows; ++r) taken += take(s.row_offset + r) ? 1 : 0;
+    if (taken == 0) return true;
+    columns_.clear();
+    bool inside = true;
+    for (const Piece& p : s.pieces) {
+      const Character& ch = chars_[static_cast<std::size_t>(p.character)];
+      for (int c : p.channels) {
+        const BasisAt& basis = ch.layout.basis(c, p.frame);
+        for (int q = 0; q < 4; ++q) {
+          const int u = band_index(ch, c, basis.first + q);
+          if (u < 0) {
+            inside = false;
+            continue;
+          }
+          if (local_column_[static_cast<std::size_t>(u)] < 0) {
+            local_column_[static_cast<std::size_t>(u)] = static_cast<int>(columns_.size());
+            columns_.push_back(u);
+          }
+        }
+      }
+    }
+    if (!inside) {
+      for (int u : columns_) local_column_[static_cast<std::size_t>(u)] = -1;
+      return false;
+    }
+    rows_dense_.setZero(taken, static_cast<Eigen::Index>(columns_.size()));
+    rho_weighted_.resize(taken);
+    int k = 0;
+    for (int r = 0; r < s.rows; ++r) {
+      if (!take(s.row_offset + r)) continue;
+      for (const Piece& p : s.pieces) {
+        const Character& ch = chars_[static_cast<std::size_t>(p.character)];
+        const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + p.g_offset, s.rows,
+                                                  static_cast<Eigen::Index>(p.channels.size()));
+        for (std::size_t i = 0; i < p.channels.size(); ++i) {
+          const double gi = w * G(r, static_cast<Eigen::Index>(i));
+          if (gi == 0) continue;
+          const BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
+          for (int q = 0; q < 4; ++q)
+            rows_dense_(k, local_column_[static_cast<std::size_t>(band_index(ch, p.channels[i], basis.first + q))]) +=
+                gi * basis.weight[static_cast<std::size_t>(q)];
+        }
+      }
+      rho_weighted_[k++] = w * rho(s.row_offset + r);
+    }
+    // The block's lower triangle, a few rows at a time (GEMM's set-up costs more at this size).
+    for (std::size_t i = 0; i < columns_.size(); ++i) {
+      const auto ci = static_cast<Eigen::Index>(i);
+      const int u = columns_[i];
+      grad_[u] += rows_dense_.col(ci).dot(rho_weighted_);
+      for (std::size_t j = 0; j < columns_.size(); ++j) {
+        const int v = columns_[j];
+        if (u >= v) band_.at(u, v) += rows_dense_.col(ci).dot(rows_dense_.col(static_cast<Eigen::Index>(j)));
+      }
+    }
+    for (int u : columns_) local_column_[static_cast<std::size_t>(u)] = -1;
+    return true;
+  }
+
   // Normal equations of the active rows over the controls of the channels they touch.
   void assemble(const Eigen::VectorXd& x) {
     // 1. Channels the active rows touch.
@@ -567,65 +671,11 @@ class Pass {
         for (int bc : g.touched) ch.normal(a, bc) = 0;
       }
     }
-    // 5. Samples reading several frames or both characters: their active rows over the union of
-    //    the controls they touch (a control weighed by two frames' bases counted once), the
-    //    sample's small dense normal block formed at once, then scattered into the band.
-    std::vector<int> columns;             // band indexes the sample touches, in first-seen order
-    Eigen::MatrixXd rows_dense;           // active rows x columns, weighted
-    Eigen::VectorXd rho_weighted;
+    // 5. Samples reading several frames or both characters, row blocks at once.
     if (static_cast<int>(local_column_.size()) != n) local_column_.assign(static_cast<std::size_t>(n), -1);
     for (int si : multi_) {
       const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
-      if (!sample_active(s)) continue;
-      const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
-      int active_rows = 0;
-      for (int r = 0; r < s.rows; ++r) active_rows += active_[static_cast<std::size_t>(s.row_offset + r)] ? 1 : 0;
-      if (active_rows == 0) continue;
-      columns.clear();
-      for (const Piece& p : s.pieces) {
-        const Character& ch = chars_[static_cast<std::size_t>(p.character)];
-        for (int c : p.channels) {
-          const BasisAt& basis = ch.layout.basis(c, p.frame);
-          for (int q = 0; q < 4; ++q) {
-            const int u = band_index(ch, c, basis.first + q);
-            if (local_column_[static_cast<std::size_t>(u)] < 0) {
-              local_column_[static_cast<std::size_t>(u)] = static_cast<int>(columns.size());
-              columns.push_back(u);
-            }
-          }
-        }
-      }
-      rows_dense.setZero(active_rows, static_cast<Eigen::Index>(columns.size()));
-      rho_weighted.resize(active_rows);
-      int k = 0;
-      for (int r = 0; r < s.rows; ++r) {
-        if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
-        for (const Piece& p : s.pieces) {
-          const Character& ch = chars_[static_cast<std::size_t>(p.character)];
-          const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + p.g_offset, s.rows,
-                                                    static_cast<Eigen::Index>(p.channels.size()));
-          for (std::size_t i = 0; i < p.channels.size(); ++i) {
-            const double gi = w * G(r, static_cast<Eigen::Index>(i));
-            if (gi == 0) continue;
-            const BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
-            for (int q = 0; q < 4; ++q)
-              rows_dense(k, local_column_[static_cast<std::size_t>(band_index(ch, p.channels[i], basis.first + q))]) +=
-                  gi * basis.weight[static_cast<std::size_t>(q)];
-          }
-        }
-        rho_weighted[k++] = w * rho(s.row_offset + r);
-      }
-      // The block's lower triangle, a few rows at a time (GEMM's set-up costs more at this size).
-      for (std::size_t i = 0; i < columns.size(); ++i) {
-        const auto ci = static_cast<Eigen::Index>(i);
-        const int u = columns[i];
-        grad_[u] += rows_dense.col(ci).dot(rho_weighted);
-        for (std::size_t j = 0; j < columns.size(); ++j) {
-          const int v = columns[j];
-          if (u >= v) band_.at(u, v) += rows_dense.col(ci).dot(rows_dense.col(static_cast<Eigen::Index>(j)));
-        }
-      }
-      for (int u : columns) local_column_[static_cast<std::size_t>(u)] = -1;
+      if (sample_active(s)) add_rows(s, [&](int row) { return active_[static_cast<std::size_t>(row)] != 0; });
     }
     // 6. Damping.
     for (int i = 0; i < n; ++i) {
@@ -663,7 +713,14 @@ class Pass {
   std::vector<int> band_index_;   // global unknown -> band index, -1 outside the band
   std::vector<int> band_global_;  // band index -> global unknown
   std::vector<double> band_sensitivity_;
-  std::vector<int> local_column_;  // band index -> column of the multi-frame sample being assembled (-1)
+  std::vector<int> local_column_;  // band index -> column of the sample being added (-1), add_rows
+  std::vector<int> columns_;       // add_rows: band indexes the sample touches, in first-seen order
+  Eigen::MatrixXd rows_dense_;     // add_rows: taken rows x columns, weighted
+  Eigen::VectorXd rho_weighted_;
+  BandedCholesky saved_band_;      // the last step's matrix before factoring (lambda included)
+  Eigen::VectorXd saved_grad_;
+  std::vector<char> held_at_save_;  // held_ when it was assembled
+  bool saved_valid_ = false;
   BandedCholesky band_;
   Eigen::VectorXd grad_;
 };
@@ -998,7 +1055,7 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
         if (pass.hold_blocking(r_at_x, options.inequality_tolerance) == 0) break;
         full_step_evaluated = false;
         pass.evaluate(x, true);
-        slope = pass.step(x, dx, lambda);
+        slope = pass.step_with_held(x, dx, lambda);
       }
       if (!(slope < 0)) {
         stop = "no descent direction";
