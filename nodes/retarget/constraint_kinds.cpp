@@ -29,6 +29,17 @@ Relation relation_from_string(const std::string& text) {
   throw std::invalid_argument("relation '" + text + "': expected equal, at_least or at_most");
 }
 
+std::string sample_locals_problem(const Constraint& c) {
+  for (const Sample& s : c.samples) {
+    if (!s.locals.empty() && s.locals.size() != c.points.size())
+      return "a sample gives " + std::to_string(s.locals.size()) + " point offsets for " +
+             std::to_string(c.points.size()) + " points";
+    for (const Eigen::Vector3d& l : s.locals)
+      if (!l.allFinite()) return "a sample's point offset is not finite";
+  }
+  return "";
+}
+
 int ConstraintSet::character_count() const {
   int n = 0;
   for (const Constraint& c : constraints) {
@@ -72,12 +83,8 @@ void check_common(const Constraint& c, std::size_t points, std::size_t min_chann
   if (!(c.weight > 0) || !std::isfinite(c.weight)) fail(c, "weight must be positive and finite");
   if (c.samples.empty()) fail(c, "has no samples (frames)");
   const std::size_t frames = c.points.size() + c.channels.size();
+  if (const std::string problem = sample_locals_problem(c); !problem.empty()) fail(c, problem);
   for (const Sample& s : c.samples) {
-    if (!s.locals.empty() && s.locals.size() != c.points.size())
-      fail(c, "a sample gives " + std::to_string(s.locals.size()) + " point offsets for " +
-                  std::to_string(c.points.size()) + " points");
-    for (const Eigen::Vector3d& l : s.locals)
-      if (!l.allFinite()) fail(c, "a sample's point offset is not finite");
     if (s.frames.size() != frames)
       fail(c, "a sample has " + std::to_string(s.frames.size()) + " frames, expected " + std::to_string(frames) +
                   " (one per point, then one per channel)");

@@ -799,13 +799,8 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
                                     std::to_string(s.joint_count()) + " joints)");
       if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
     }
-    for (const Sample& s : c.samples) {
-      if (!s.locals.empty() && s.locals.size() != c.points.size())
-        throw std::invalid_argument(label_of(c) + ": a sample gives " + std::to_string(s.locals.size()) +
-                                    " point offsets for " + std::to_string(c.points.size()) + " points");
-      for (const Eigen::Vector3d& l : s.locals)
-        if (!l.allFinite()) throw std::invalid_argument(label_of(c) + ": a sample's point offset is not finite");
-    }
+    if (const std::string problem = sample_locals_problem(c); !problem.empty())
+      throw std::invalid_argument(label_of(c) + ": " + problem);
     for (const ChannelRef& ch : c.channels) {
       if (ch.character < 0 || ch.character >= nchar)
         throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +

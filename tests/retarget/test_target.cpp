@@ -12,6 +12,7 @@
 #include "kg/graph/error.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/synth/figure.hpp"
 #include "kg/synth/synthesize.hpp"
@@ -340,6 +341,15 @@ TEST_CASE("constraints on a morphing target: each sample's points scaled at its 
     const auto at = morph.skeleton_at(c.samples[i].frames[0] / 30.0);
     CHECK((c.samples[i].locals[0] - at->joint(toe).end_sites.front()).norm() < 1e-12);
   }
+  // Per-sample offsets must match the points, for built-in kinds and the solver alike.
+  kg::retarget::ConstraintSet bad = moved;
+  bad.constraints.front().samples[1].locals.push_back(tip);
+  CHECK_THAT(thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
+             Catch::Contains("a sample gives 2 point offsets for 1 points"));
+  bad.constraints.front().samples[1].locals = {Eigen::Vector3d(NAN, 0, 0)};
+  CHECK_THAT(thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
+             Catch::Contains("point offset is not finite"));
+
   // A constant target scales the constraint's points and leaves samples alone; the other
   // character's points stay.
   set.constraints.front().points.push_back({1, toe, tip});

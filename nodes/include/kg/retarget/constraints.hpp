@@ -77,6 +77,10 @@ inline PointRef point_at(const Constraint& constraint, const Sample& sample, std
   return p;
 }
 
+// "" when every sample's `locals` suit `constraint` (none, or one finite offset per point), else
+// what is wrong, for the caller's message: kind-independent, so the solver checks plugin kinds' too.
+std::string sample_locals_problem(const Constraint& constraint);
+
 struct ConstraintSet {
   std::vector<Constraint> constraints;
   // Number of characters the constraints refer to (max PointRef/ChannelRef character + 1).
