@@ -32,13 +32,22 @@ KindFinder builtin_kinds() {
 // A three-segment arm hanging from a free root: 6 + 3 + 2 channels.
 std::shared_ptr<const motion::Skeleton> make_arm(double scale = 1.0) {
   auto s = std::make_shared<motion::Skeleton>();
-  const std::vector<Channel> zxy{{ChannelKind::Zrotation}, {ChannelKind::Xrotation}, {ChannelKind::Yrotation}};
+  const std::vector<Channel> zxy{
+      {ChannelKind::Zrotation}, {ChannelKind::Xrotation}, {ChannelKind::Yrotation}};
   s->add_joint({.name = "root",
                 .parent = -1,
-                .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition},
-                             {ChannelKind::Zrotation}, {ChannelKind::Xrotation}, {ChannelKind::Yrotation}},
+                .channels = {{ChannelKind::Xposition},
+                             {ChannelKind::Yposition},
+                             {ChannelKind::Zposition},
+                             {ChannelKind::Zrotation},
+                             {ChannelKind::Xrotation},
+                             {ChannelKind::Yrotation}},
                 .end_sites = {}});
-  s->add_joint({.name = "upper", .parent = 0, .offset = {0.1 * scale, -0.5 * scale, 0}, .channels = zxy, .end_sites = {}});
+  s->add_joint({.name = "upper",
+                .parent = 0,
+                .offset = {0.1 * scale, -0.5 * scale, 0},
+                .channels = zxy,
+                .end_sites = {}});
   s->add_joint({.name = "lower",
                 .parent = 1,
                 .offset = {0, -0.4 * scale, 0},
@@ -73,7 +82,10 @@ Eigen::Vector3d world_point(const motion::Motion& m, int frame, int joint, const
 
 Constraint pin(const std::string& label, int joint, const Eigen::Vector3d& local, const Eigen::Vector3d& at,
                std::vector<int> frames, int character = 0) {
-  Constraint c{.kind = "position", .label = label, .points = {{character, joint, local}}, .params = {at.x(), at.y(), at.z()}};
+  Constraint c{.kind = "position",
+               .label = label,
+               .points = {{character, joint, local}},
+               .params = {at.x(), at.y(), at.z()}};
   for (int f : frames) c.samples.push_back({{f}});
   return c;
 }
@@ -94,17 +106,25 @@ TEST_CASE("spacetime: analytic Jacobian of the whole problem matches finite diff
   problem.characters.push_back({.initial = swing(arm2, frames, 0.7)});
   ConstraintSet set;
   set.constraints.push_back(pin("hand", 2, kHand, {0.3, 0.2, 0.1}, {2, 5, 12}));
-  Constraint floor{.kind = "region", .label = "elbow above", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, 0.9, -kInf, kInf, kInf, kInf}};
+  Constraint floor{.kind = "region",
+                   .label = "elbow above",
+                   .points = {{0, 1, {0, 0, 0}}},
+                   .params = {-kInf, 0.9, -kInf, kInf, kInf, kInf}};
   for (int f = 0; f < frames; ++f) floor.samples.push_back({{f}});
   set.constraints.push_back(floor);
-  Constraint gap{.kind = "distance", .label = "hold", .points = {{0, 2, kHand}, {1, 2, kHand}}, .params = {0.5}, .weight = 2};
+  Constraint gap{.kind = "distance",
+                 .label = "hold",
+                 .points = {{0, 2, kHand}, {1, 2, kHand}},
+                 .params = {0.5},
+                 .weight = 2};
   gap.samples.push_back({{4, 4}});
   gap.samples.push_back({{7, 9}});
   set.constraints.push_back(gap);
   Constraint stay{.kind = "same_place", .label = "plant", .points = {{1, 2, kHand}, {1, 2, kHand}}};
   stay.samples.push_back({{1, 11}});
   set.constraints.push_back(stay);
-  Constraint range{.kind = "parameter_range", .label = "elbow limit", .channels = {{0, 9}}, .params = {0.0, 0.5}};
+  Constraint range{
+      .kind = "parameter_range", .label = "elbow limit", .channels = {{0, 9}}, .params = {0.0, 0.5}};
   for (int f = 0; f < frames; ++f) range.samples.push_back({{f}});
   set.constraints.push_back(range);
   problem.constraints = &set;
@@ -127,7 +147,8 @@ TEST_CASE("spacetime: analytic Jacobian of the whole problem matches finite diff
     Eigen::VectorXd xp = x, xm = x;
     xp[i] += h;
     xm[i] -= h;
-    fd.col(i) = (linearize_spacetime(problem, xp).residual - linearize_spacetime(problem, xm).residual) / (2 * h);
+    fd.col(i) =
+        (linearize_spacetime(problem, xp).residual - linearize_spacetime(problem, xm).residual) / (2 * h);
   }
   const double err = (fd - lin.jacobian).cwiseAbs().maxCoeff();
   INFO("max |J - J_fd| = " << err << ", max |J| = " << lin.jacobian.cwiseAbs().maxCoeff());
@@ -139,13 +160,17 @@ TEST_CASE("spacetime: analytic Jacobian of the whole problem matches finite diff
   CHECK(lin.jacobian(0, layouts[0].unknown(0, 0)) != 0);
 }
 
-TEST_CASE("spacetime: the active set takes violated inequality rows in and lets satisfied ones go", "[spacetime]") {
+TEST_CASE("spacetime: the active set takes violated inequality rows in and lets satisfied ones go",
+          "[spacetime]") {
   const int frames = 30;
   auto arm = make_arm();
   const motion::Motion m1 = swing(arm, frames);
   ConstraintSet set;
   // Elbow height runs about 0.7 m: a floor at 0.5 is satisfied everywhere and must change nothing.
-  Constraint low{.kind = "region", .label = "low floor", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, 0.5, -kInf, kInf, kInf, kInf}};
+  Constraint low{.kind = "region",
+                 .label = "low floor",
+                 .points = {{0, 1, {0, 0, 0}}},
+                 .params = {-kInf, 0.5, -kInf, kInf, kInf, kInf}};
   for (int f = 0; f < frames; ++f) low.samples.push_back({{f}});
   set.constraints.push_back(low);
   SpacetimeProblem problem;
@@ -162,7 +187,10 @@ TEST_CASE("spacetime: the active set takes violated inequality rows in and lets 
   // The hand pinned 10 cm above a floor its elbow must stay over; the elbow starts below the
   // floor at the pinned frames (rows enter), ends above it (they leave).
   const double elbow_y = world_point(m1, 15, 1, Eigen::Vector3d::Zero()).y();
-  Constraint high{.kind = "region", .label = "high floor", .points = {{0, 1, {0, 0, 0}}}, .params = {-kInf, elbow_y + 0.05, -kInf, kInf, kInf, kInf}};
+  Constraint high{.kind = "region",
+                  .label = "high floor",
+                  .points = {{0, 1, {0, 0, 0}}},
+                  .params = {-kInf, elbow_y + 0.05, -kInf, kInf, kInf, kInf}};
   for (int f = 10; f <= 20; ++f) high.samples.push_back({{f}});
   set.constraints = {high};
   const Eigen::Vector3d hand = world_point(m1, 15, 2, kHand);
@@ -213,7 +241,10 @@ TEST_CASE("spacetime: two characters held a distance apart, one partly frozen", 
   motion::Motion mb = swing(b, frames, 1.0);
   for (int f = 0; f < frames; ++f) mb.values(f, 0) += 0.6;  // side by side
   ConstraintSet set;
-  Constraint hold{.kind = "distance", .label = "hand-hold", .points = {{0, 2, kHand}, {1, 2, kHand * 0.7}}, .params = {0.15}};
+  Constraint hold{.kind = "distance",
+                  .label = "hand-hold",
+                  .points = {{0, 2, kHand}, {1, 2, kHand * 0.7}},
+                  .params = {0.15}};
   for (int f = 5; f < 35; ++f) hold.samples.push_back({{f, f}});
   set.constraints.push_back(hold);
   SpacetimeProblem problem;
@@ -229,7 +260,8 @@ TEST_CASE("spacetime: two characters held a distance apart, one partly frozen", 
   REQUIRE(r.converged());
   REQUIRE(r.motions.size() == 2);
   for (int f = 5; f < 35; ++f) {
-    const double d = (world_point(r.motions[0], f, 2, kHand) - world_point(r.motions[1], f, 2, kHand * 0.7)).norm();
+    const double d =
+        (world_point(r.motions[0], f, 2, kHand) - world_point(r.motions[1], f, 2, kHand * 0.7)).norm();
     CHECK(d == Approx(0.15).margin(1e-4));
   }
   for (int c = 0; c < 6; ++c) CHECK(r.motions[1].values.col(c) == mb.values.col(c));
@@ -238,7 +270,8 @@ TEST_CASE("spacetime: two characters held a distance apart, one partly frozen", 
   CHECK((r.motions[1].values - mb.values).cwiseAbs().maxCoeff() > 1e-3);
 }
 
-TEST_CASE("spacetime: a contradictory problem is reported as not converged, with its violation", "[spacetime]") {
+TEST_CASE("spacetime: a contradictory problem is reported as not converged, with its violation",
+          "[spacetime]") {
   const int frames = 20;
   auto arm = make_arm();
   const motion::Motion m1 = swing(arm, frames);
@@ -277,7 +310,8 @@ TEST_CASE("spacetime: denser keys on retry meet what the first spacing cannot", 
   ConstraintSet set;
   Constraint zig{.kind = "position", .label = "zigzag", .points = {{0, 2, kHand}}, .params = {0, 0, 0}};
   for (int f = 0; f < frames; f += 2) {
-    const Eigen::Vector3d p = world_point(m1, f, 2, kHand) + Eigen::Vector3d(0, (f / 2) % 2 ? 0.03 : -0.03, 0);
+    const Eigen::Vector3d p =
+        world_point(m1, f, 2, kHand) + Eigen::Vector3d(0, (f / 2) % 2 ? 0.03 : -0.03, 0);
     zig.samples.push_back({{f}, {p.x(), p.y(), p.z()}});
   }
   set.constraints.push_back(zig);
@@ -346,7 +380,9 @@ TEST_CASE("spacetime: a synthesized walk retargeted to 60% with short legs", "[s
     motion::Joint& jt = target->joint_mut(j);
     double k = scale;
     for (int s = 0; s < 2; ++s)
-      if (j == walk.figure.leg[static_cast<std::size_t>(s)] || j == walk.figure.foot[static_cast<std::size_t>(s)]) k *= 0.85;
+      if (j == walk.figure.leg[static_cast<std::size_t>(s)] ||
+          j == walk.figure.foot[static_cast<std::size_t>(s)])
+        k *= 0.85;
     jt.offset *= k;
     for (Eigen::Vector3d& e : jt.end_sites) e *= scale;
   }
@@ -360,9 +396,13 @@ TEST_CASE("spacetime: a synthesized walk retargeted to 60% with short legs", "[s
     set.constraints.push_back(c);
   }
   for (int s = 0; s < 2; ++s)
-    for (const auto& [joint, local] : {std::pair{walk.figure.foot[static_cast<std::size_t>(s)], walk.figure.heel_local},
-                                       std::pair{walk.figure.toe[static_cast<std::size_t>(s)], walk.figure.toe_tip_local}}) {
-      Constraint c{.kind = "region", .label = "above floor", .points = {{0, joint, local * scale}}, .params = {-kInf, 0.0, -kInf, kInf, kInf, kInf}};
+    for (const auto& [joint, local] :
+         {std::pair{walk.figure.foot[static_cast<std::size_t>(s)], walk.figure.heel_local},
+          std::pair{walk.figure.toe[static_cast<std::size_t>(s)], walk.figure.toe_tip_local}}) {
+      Constraint c{.kind = "region",
+                   .label = "above floor",
+                   .points = {{0, joint, local * scale}},
+                   .params = {-kInf, 0.0, -kInf, kInf, kInf, kInf}};
       for (int f = 0; f < src.frame_count(); ++f) c.samples.push_back({{f}});
       set.constraints.push_back(c);
     }
@@ -379,8 +419,8 @@ TEST_CASE("spacetime: a synthesized walk retargeted to 60% with short legs", "[s
 
   problem.options = {};
   const SpacetimeResult r = solve_spacetime(problem);
-  INFO(r.message << " (" << src.frame_count() << " frames, " << r.unknowns << " unknowns, bandwidth " << r.bandwidth
-                 << ", " << r.seconds * 1000 << " ms)");
+  INFO(r.message << " (" << src.frame_count() << " frames, " << r.unknowns << " unknowns, bandwidth "
+                 << r.bandwidth << ", " << r.seconds * 1000 << " ms)");
   REQUIRE(r.converged());
   CHECK(r.passes == 1);
   for (const KindReport& k : r.kinds) {
@@ -391,16 +431,21 @@ TEST_CASE("spacetime: a synthesized walk retargeted to 60% with short legs", "[s
   double worst_plant = 0, lowest = 1;
   for (const synth::FootPlant& p : walk.plants)
     for (int f = p.first_frame; f <= p.last_frame; ++f)
-      worst_plant = std::max(worst_plant, (world_point(r.motions[0], f, p.joint, p.local * scale) - p.world * scale).norm());
+      worst_plant = std::max(
+          worst_plant, (world_point(r.motions[0], f, p.joint, p.local * scale) - p.world * scale).norm());
   for (int f = 0; f < src.frame_count(); ++f)
     for (int s = 0; s < 2; ++s)
       lowest = std::min(lowest, world_point(r.motions[0], f, walk.figure.toe[static_cast<std::size_t>(s)],
-                                            walk.figure.toe_tip_local * scale).y());
+                                            walk.figure.toe_tip_local * scale)
+                                    .y());
   CHECK(worst_plant <= 1e-3);
   CHECK(lowest >= -1e-3);
   // Smooth: the largest frame-to-frame change of any channel grows little over the source's.
   const auto step = [](const motion::FrameMatrix& v) {
-    return (v.bottomRows(v.rows() - 1) - v.topRows(v.rows() - 1)).rightCols(v.cols() - 3).cwiseAbs().maxCoeff();
+    return (v.bottomRows(v.rows() - 1) - v.topRows(v.rows() - 1))
+        .rightCols(v.cols() - 3)
+        .cwiseAbs()
+        .maxCoeff();
   };
   CHECK(step(r.motions[0].values) < 2 * step(src.values));
 }
@@ -431,7 +476,8 @@ TEST_CASE("spacetime: banded Cholesky agrees with a dense factorisation", "[spac
   CHECK_FALSE(indefinite.factor());
 }
 
-TEST_CASE("spacetime: a two-frame row far apart (non-skid over a long span) is solved exactly", "[spacetime]") {
+TEST_CASE("spacetime: a two-frame row far apart (non-skid over a long span) is solved exactly",
+          "[spacetime]") {
   const int frames = 40;
   auto arm = make_arm();
   const motion::Motion m1 = swing(arm, frames);
