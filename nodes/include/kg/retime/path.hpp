@@ -1,0 +1,24 @@
+// A clip as a path in its channels' space (McCann et al. 2006 §3.1): the channels' first and
+// second derivatives with respect to source time, q' and q'', which with the retiming's ṗ and p̈
+// give the retimed velocities q̇ = q' ṗ and accelerations q̈ = q'' ṗ² + q' p̈ (eq. 3 and 4).
+//
+//   PathDerivatives d = path_derivatives(motion);
+//   Eigen::RowVectorXd qdot = d.first.row(f) * pdot;
+#pragma once
+
+#include "kg/motion/motion.hpp"
+
+namespace kg::retime {
+
+struct PathDerivatives {
+  motion::FrameMatrix first;   // frames x channels: dq/dp, per second of source time
+  motion::FrameMatrix second;  // frames x channels: d²q/dp², per second² of source time
+};
+
+// Central differences at interior frames, second-order one-sided ones at the two ends; rotation
+// channels are differenced along their shorter way round, so a curve wrapping through +-180
+// degrees has no spike. A clip of one frame has zero derivatives; two frames give a constant
+// first derivative and a zero second. Throws std::invalid_argument when motion.check() fails.
+PathDerivatives path_derivatives(const motion::Motion& motion);
+
+}  // namespace kg::retime
