@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -131,8 +132,42 @@ Contacts assemble_contacts(const motion::Motion& m, std::vector<ContactPatch> pa
   return c;
 }
 
-ContactPatch foot_patch(const motion::Skeleton& sk, int foot, const FootContactOptions& o, ContactVertex* heel_out,
-                        ContactVertex* tip_out) {
+int flattest_frame(const motion::Motion& m, int foot) {
+  const motion::Skeleton& sk = *m.skeleton;
+  if (foot < 0 || foot >= sk.joint_count())
+    throw std::invalid_argument("contacts: foot joint " + std::to_string(foot) + " out of range");
+  const auto [tip_joint, tip_local] = toe_tip(sk, foot);
+  const int frames = m.frame_count();
+  std::vector<double> ball(static_cast<std::size_t>(frames)), tip(static_cast<std::size_t>(frames));
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  for (int f = 0; f < frames; ++f) {
+    motion::forward_kinematics(sk, m.values.row(f), world);
+    const Eigen::Isometry3d& t = world[static_cast<std::size_t>(tip_joint)];
+    tip[static_cast<std::size_t>(f)] = (t * tip_local).y();
+    ball[static_cast<std::size_t>(f)] = tip_joint == foot ? tip[static_cast<std::size_t>(f)] : t.translation().y();
+  }
+  auto low = [](std::vector<double> v) {
+    if (v.empty()) return 0.0;
+    const auto k = static_cast<std::ptrdiff_t>(0.05 * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + k, v.end());
+    return v[static_cast<std::size_t>(k)];
+  };
+  const double ball_low = low(ball), tip_low = low(tip);
+  int best = 0;
+  double best_score = std::numeric_limits<double>::infinity();
+  for (int f = 0; f < frames; ++f) {
+    const double score =
+        std::max(ball[static_cast<std::size_t>(f)] - ball_low, tip[static_cast<std::size_t>(f)] - tip_low);
+    if (score < best_score) {
+      best_score = score;
+      best = f;
+    }
+  }
+  return best;
+}
+
+ContactPatch foot_patch(const motion::Skeleton& sk, motion::FrameRef pose, int foot, const FootContactOptions& o,
+                        ContactVertex* heel_out, ContactVertex* tip_out) {
   if (foot < 0 || foot >= sk.joint_count())
     throw std::invalid_argument("contacts: foot joint " + std::to_string(foot) + " out of range");
   if (!(o.heel_ratio >= 0) || !std::isfinite(o.heel_ratio))
@@ -140,10 +175,11 @@ ContactPatch foot_patch(const motion::Skeleton& sk, int foot, const FootContactO
   if (!(o.width_ratio > 0) || !std::isfinite(o.width_ratio))
     throw std::invalid_argument("contacts: width_ratio must be finite and > 0");
   const auto [tip_joint, tip_local] = toe_tip(sk, foot);
-  // The rest pose: every channel 0 (every ASF bone world-aligned; BVH offsets as written).
+  if (pose.size() != sk.channel_count())
+    throw std::invalid_argument("contacts: a pose of " + std::to_string(pose.size()) + " values for " +
+                                std::to_string(sk.channel_count()) + " channels");
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
-  const Eigen::RowVectorXd rest = Eigen::RowVectorXd::Zero(sk.channel_count());
-  motion::forward_kinematics(sk, rest, world);
+  motion::forward_kinematics(sk, pose, world);
   const Eigen::Isometry3d& foot_world = world[static_cast<std::size_t>(foot)];
   const Eigen::Isometry3d& tip_world = world[static_cast<std::size_t>(tip_joint)];
   const Eigen::Vector3d ankle = foot_world.translation();
@@ -154,7 +190,7 @@ ContactPatch foot_patch(const motion::Skeleton& sk, int foot, const FootContactO
   const double d = forward.norm();
   if (!(d > 1e-6))
     throw std::invalid_argument("contacts: the toe tip of foot '" + sk.joint(foot).name +
-                                "' is not ahead of its ankle in the rest pose");
+                                "' is not ahead of its ankle");
   forward /= d;
   const Eigen::Vector3d side = forward.cross(Eigen::Vector3d::UnitY()).normalized();
   const double sole = std::min(ball.y(), tip.y());
@@ -198,16 +234,18 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   std::vector<std::string> notes;
   for (int foot : feet) {
     ContactVertex heel, tip;
-    patches.push_back(foot_patch(sk, foot, o, &heel, &tip));
+    const int flat = flattest_frame(m, foot);
+    patches.push_back(foot_patch(sk, m.values.row(flat), foot, o, &heel, &tip));
     plants.points.push_back(point_spec(sk, heel));
     plants.points.push_back(point_spec(sk, tip));
     const ContactPatch& p = patches.back();
     std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
-    motion::forward_kinematics(sk, Eigen::RowVectorXd::Zero(sk.channel_count()), world);
+    motion::forward_kinematics(sk, m.values.row(flat), world);
     auto at = [&](const ContactVertex& v) { return world[static_cast<std::size_t>(v.joint)] * v.local; };
     notes.push_back("foot " + p.name + ": heel on " + sk.joint(heel.joint).name + ", tip on " +
-                    sk.joint(tip.joint).name + ", length " + fmt((at(p.vertices[1]) - at(p.vertices[0])).norm()) +
-                    " m, width " + fmt((at(p.vertices[1]) - at(p.vertices[2])).norm()) + " m");
+                    sk.joint(tip.joint).name + ", built at frame " + std::to_string(flat) + ", length " +
+                    fmt((at(p.vertices[1]) - at(p.vertices[0])).norm()) + " m, width " +
+                    fmt((at(p.vertices[1]) - at(p.vertices[2])).norm()) + " m");
   }
   const retarget::FootplantDetection d = retarget::detect_footplants(m, plants);
   const int frames = m.frame_count();

@@ -9,11 +9,14 @@
 // Coulomb's law). A force f at a vertex is P λ with λ >= 0 (4 entries, newtons).
 //
 // Detected feet (detect_contacts): per foot a rectangle of four vertices spanning heel to toe tip,
-// built in the rest pose (every channel 0) from the skeleton:
+// built in the clip's flattest frame for that foot (where its ball and toe tip are both nearest
+// their lowest heights: mid-stance). Not the rest pose: rest poses differ (CMU's ASF stands on flat
+// feet, MotionBuilder's BVH of the same take points them at the floor). In that frame:
 //   - A: the foot joint's origin (the ankle); T: the toe tip, the End Site of the foot's toe child
-//     (else that child's origin), or without a toe child the foot's own End Site;
+//     (else that child's origin), or without a toe child the foot's own End Site; the ball: the toe
+//     child's origin (T without one);
 //   - forward = the horizontal direction from A to T, d = the horizontal distance from A to T;
-//   - the sole height is the lower of T and the toe joint's origin (the ball) in the rest pose;
+//   - the sole height is the lower of the ball and T;
 //   - the heel lies heel_ratio * d behind A on the sole (default 0.25: the heel reaches a fifth of
 //     the foot's length behind the ankle), so the foot's length is L = (1 + heel_ratio) d;
 //   - the width is width_ratio * L (default 0.36: Winter's foot breadth 0.055 H over foot length
@@ -37,6 +40,7 @@
 #include <Eigen/Core>
 
 #include "kg/graph/value.hpp"
+#include "kg/motion/kinematics.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/footplants.hpp"
 
@@ -101,20 +105,28 @@ struct FootContactOptions {
   double heel_ratio = 0.25;   // heel behind the ankle, as a fraction of the ankle-to-tip distance (>= 0)
   double width_ratio = 0.36;  // foot width as a fraction of the foot's length (> 0)
   // Plant detection of the heel and toe-tip points (its `points` are ignored: set from the feet).
-  // Contacts keep a plant's rolling ends (trim_distance 0): the foot bears weight while it rolls.
+  // A foot bears weight while it rolls, so contacts keep a plant's rolling ends (trim_distance 0)
+  // and admit faster points than footplants do (0.3 m/s: a heel strikes at a few dm/s; at 0.15 m/s
+  // CMU 16_15 loses half its double supports).
   retarget::FootplantOptions plants = [] {
     retarget::FootplantOptions o;
     o.trim_distance = 0.0;
+    o.speed_threshold = 0.3;
     return o;
   }();
 };
 
-// The rectangle of a detected foot (see the header comment): vertices 0 and 3 are the heel pair,
-// 1 and 2 the tip pair. `heel` and `tip` receive the heel centre (on the foot joint) and the toe
-// tip (on the tip joint) the detection watches. Throws std::invalid_argument for a joint out of
-// range or a foot whose tip coincides with its ankle horizontally.
-ContactPatch foot_patch(const motion::Skeleton& skeleton, int foot_joint, const FootContactOptions& options,
-                        ContactVertex* heel = nullptr, ContactVertex* tip = nullptr);
+// The rectangle of a foot (see the header comment) built in `pose` (skeleton.channel_count()
+// values): vertices 0 and 3 are the heel pair, 1 and 2 the tip pair. `heel` and `tip` receive the
+// heel centre (on the foot joint) and the toe tip (on the tip joint) the detection watches. Throws
+// std::invalid_argument for a joint out of range, options out of range, or a foot whose tip is not
+// ahead of its ankle horizontally in that pose.
+ContactPatch foot_patch(const motion::Skeleton& skeleton, motion::FrameRef pose, int foot_joint,
+                        const FootContactOptions& options, ContactVertex* heel = nullptr, ContactVertex* tip = nullptr);
+
+// The frame where the foot's ball and toe tip are both nearest their lowest heights over the clip
+// (5th percentiles): max(ball − its low, tip − its low) is least. 0 for an empty clip.
+int flattest_frame(const motion::Motion& motion, int foot_joint);
 
 // Feet found and planted frames detected; throws std::invalid_argument for an unknown foot name
 // (with the nearest name), no foot found, or options out of range.
