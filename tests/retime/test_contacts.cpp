@@ -6,6 +6,9 @@
 #include <filesystem>
 #include <sstream>
 
+#include "../support/node_context.hpp"
+#include "../support/temp_dir.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/graph/error.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
@@ -360,5 +363,43 @@ patches:
       }
     }
     CHECK_THROWS_WITH(read_contacts_file("/nonexistent/contacts.yaml", m), Catch::Contains("/nonexistent/contacts.yaml"));
+  }
+}
+
+TEST_CASE("The retime.contacts node", "[contacts][nodes]") {
+  const graph::Registry registry = test::registry_of(retime_contact_node_types());
+  SECTION("from a file") {
+    const motion::Motion m = small_clip(40);
+    test::TempDir dir;
+    const auto path = dir.write("c.yaml", "version: 1\npatches:\n  - joint: rfoot\n    vertices: [[0, 0, 0], [0.1, 0, 0]]\n"
+                                          "    frames: [[0, 9], [20, 24]]\n");
+    const test::NodeContext ctx = test::run_node(registry, "retime.contacts",
+                                                 test::params_for(registry, "retime.contacts", {{"path", path.string()}}),
+                                                 {{"motion", graph::Value::make(m)}});
+    const Contacts& c = ctx.outputs.at("contacts").get<Contacts>();
+    CHECK(c.frame_count() == 40);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("patches")) == 1);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("frames_one_patch")) == 15);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("frames_without_contact")) == 25);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("touching_vertices")) == 30);
+    CHECK(std::get<std::string>(ctx.figures.at("source")) == path.string());
+  }
+  SECTION("detected, and bad params") {
+    const std::string asf = kData + "/cmu/asf_amc/16.asf", amc = kData + "/cmu/asf_amc/16_15.amc";
+    CHECK_THROWS_WITH(registry.create_node("retime.contacts", test::params_for(registry, "retime.contacts",
+                                                                               {{"floor", std::string("low")}})),
+                      Catch::Contains("floor 'low'"));
+    if (!std::filesystem::exists(asf) || !std::filesystem::exists(amc)) {
+      WARN("skipped: " << amc << " not found");
+      return;
+    }
+    const motion::Motion walk = io::import_asf_amc(asf, amc, {}).motion;
+    const test::NodeContext ctx =
+        test::run_node(registry, "retime.contacts", test::params_for(registry, "retime.contacts", {{"feet", std::string("lfoot, rfoot")}}),
+                       {{"motion", graph::Value::make(walk)}});
+    CHECK(std::get<std::int64_t>(ctx.figures.at("patches")) == 2);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("frames_without_contact")) == 0);
+    CHECK(std::get<std::int64_t>(ctx.figures.at("frames_more_patches")) > 0);
+    CHECK(ctx.logged("foot lfoot: heel on lfoot, tip on ltoes"));
   }
 }

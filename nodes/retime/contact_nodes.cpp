@@ -1,0 +1,166 @@
+// retime.contacts: a thin adapter over contacts.hpp (detected feet, or a contact file).
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <memory>
+#include <sstream>
+
+#include "kg/builtin_nodes.hpp"
+#include "kg/retime/contacts.hpp"
+
+namespace kg {
+
+namespace {
+
+using graph::Node;
+using graph::NodeSpec;
+using graph::NodeType;
+using graph::Params;
+using graph::ParamSpec;
+using graph::ParamType;
+using graph::RunContext;
+
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto a = item.find_first_not_of(" \t");
+    const auto b = item.find_last_not_of(" \t");
+    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
+  }
+  return out;
+}
+
+double parse_floor(const std::string& text) {
+  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
+  return v;
+}
+
+class ContactsNode final : public Node {
+ public:
+  explicit ContactsNode(const Params& p) : path_(p.get<std::string>("path")) {
+    options_.feet = split_names(p.get<std::string>("feet"));
+    options_.heel_ratio = p.get<double>("heel_ratio");
+    options_.width_ratio = p.get<double>("width_ratio");
+    options_.plants.height_threshold = p.get<double>("height_threshold");
+    options_.plants.speed_threshold = p.get<double>("speed_threshold");
+    options_.plants.hysteresis = p.get<double>("hysteresis");
+    options_.plants.min_duration_s = p.get<double>("min_duration_s");
+    options_.plants.rest_window_s = p.get<double>("rest_window_s");
+    options_.plants.floor = parse_floor(p.get<std::string>("floor"));
+  }
+
+  void run(RunContext& ctx) const override {
+    const motion::Motion& m = ctx.input<motion::Motion>("motion");
+    retime::Contacts c = path_.empty() ? retime::detect_contacts(m, options_) : retime::read_contacts_file(path_, m);
+    for (const std::string& note : c.notes) ctx.log(note);
+    std::int64_t flight = 0, single = 0, multiple = 0, points = 0;
+    for (const retime::ContactFrame& f : c.frames) {
+      const std::size_t n = f.patches().size();
+      (n == 0 ? flight : n == 1 ? single : multiple) += 1;
+      points += static_cast<std::int64_t>(f.points.size());
+    }
+    ctx.report("source", c.source);
+    ctx.report("patches", static_cast<std::int64_t>(c.patches.size()));
+    ctx.report("frames_without_contact", flight);
+    ctx.report("frames_one_patch", single);
+    ctx.report("frames_more_patches", multiple);
+    ctx.report("touching_vertices", points);
+    if (flight > 0 && path_.empty())
+      ctx.log(std::to_string(flight) + " frames without contact (flight, or plants the detection missed)");
+    ctx.output("contacts", std::move(c));
+  }
+
+ private:
+  std::string path_;
+  retime::FootContactOptions options_;
+};
+
+NodeType contacts_type() {
+  const retime::FootContactOptions d;
+  NodeSpec spec{
+      .type = "retime.contacts",
+      .version = 1,
+      .doc = "Contacts with the floor for retiming (McCann et al. 2006 §3.2): per frame the touching vertices of "
+             "polygonal patches fixed on segments, with their world positions and Jacobians. Detected (path "
+             "empty): per foot a heel-to-toe-tip rectangle (kg/retime/contacts.hpp says how it is sized), its "
+             "heel pair touching while the heel is planted, its tip pair while the toe tip is (near the floor "
+             "and slow, as retarget.footplants detects). Or read from a contact file (YAML version 1: patches "
+             "on named joints, vertices in the joint's frame, frame or time ranges).",
+      .inputs = {{"motion", "kg.Motion", true, "the clip (its poses place the vertices)"}},
+      .outputs = {{"contacts", "kg.Contacts", true, "patches and per-frame touching vertices (metres, world)"}},
+      .params = {
+          ParamSpec{.name = "path",
+                    .type = ParamType::InputPath,
+                    .default_value = std::string(),
+                    .doc = "a contact file (YAML); empty: detect the feet"},
+          ParamSpec{.name = "feet",
+                    .type = ParamType::String,
+                    .default_value = std::string(),
+                    .doc = "comma-separated foot joints (the ankle's segment: lfoot, LeftFoot); empty: found by "
+                           "common names"},
+          ParamSpec{.name = "heel_ratio",
+                    .type = ParamType::Float,
+                    .default_value = d.heel_ratio,
+                    .doc = "heel behind the ankle, as a fraction of the ankle-to-toe-tip distance",
+                    .min = 0.0,
+                    .max = 2.0},
+          ParamSpec{.name = "width_ratio",
+                    .type = ParamType::Float,
+                    .default_value = d.width_ratio,
+                    .doc = "foot width as a fraction of its length (Winter: 0.36)",
+                    .min = 1e-3,
+                    .max = 2.0},
+          ParamSpec{.name = "height_threshold",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.height_threshold,
+                    .doc = "m above the point's rest level to touch",
+                    .min = 1e-6,
+                    .max = 10.0},
+          ParamSpec{.name = "speed_threshold",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.speed_threshold,
+                    .doc = "m/s horizontal speed to touch",
+                    .min = 1e-6,
+                    .max = 100.0},
+          ParamSpec{.name = "hysteresis",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.hysteresis,
+                    .doc = "leave thresholds = touch thresholds x this",
+                    .min = 1.0,
+                    .max = 10.0},
+          ParamSpec{.name = "min_duration_s",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.min_duration_s,
+                    .doc = "shorter touches are dropped, seconds",
+                    .min = 0.0,
+                    .max = 10.0},
+          ParamSpec{.name = "rest_window_s",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.rest_window_s,
+                    .doc = "s: a point's rest level is its lowest height within this window (0: the whole clip)",
+                    .min = 0.0,
+                    .max = 100.0},
+          ParamSpec{.name = "floor",
+                    .type = ParamType::String,
+                    .default_value = std::string("auto"),
+                    .doc = "floor height in metres, or 'auto'"},
+      }};
+  return {spec, [](const Params& p) { return std::make_unique<ContactsNode>(p); }};
+}
+
+}  // namespace
+
+std::vector<graph::NodeType> retime_contact_node_types() { return {contacts_type()}; }
+
+}  // namespace kg
