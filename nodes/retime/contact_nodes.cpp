@@ -62,7 +62,8 @@ class ContactsNode final : public Node {
 
   void run(RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
-    retime::Contacts c = path_.empty() ? retime::detect_contacts(m, options_) : retime::read_contacts_file(path_, m);
+    retime::Contacts c =
+        path_.empty() ? retime::detect_contacts(m, options_) : retime::read_contacts_file(path_, m);
     for (const std::string& note : c.notes) ctx.log(note);
     std::int64_t flight = 0, single = 0, multiple = 0, points = 0;
     for (const retime::ContactFrame& f : c.frames) {
@@ -91,14 +92,17 @@ NodeType contacts_type() {
   NodeSpec spec{
       .type = "retime.contacts",
       .version = 1,
-      .doc = "Contacts with the floor for retiming (McCann et al. 2006 §3.2): per frame the touching vertices of "
-             "polygonal patches fixed on segments, with their world positions and Jacobians. Detected (path "
-             "empty): per foot a heel-to-toe-tip rectangle (kg/retime/contacts.hpp says how it is sized), its "
-             "heel pair touching while the heel is planted, its tip pair while the toe tip is (near the floor "
-             "and slow, as retarget.footplants detects). Or read from a contact file (YAML version 1: patches "
-             "on named joints, vertices in the joint's frame, frame or time ranges).",
+      .doc =
+          "Contacts with the floor for retiming (McCann et al. 2006 §3.2): per frame the touching vertices "
+          "of "
+          "polygonal patches fixed on segments, with their world positions and Jacobians. Detected (path "
+          "empty): per foot a heel-to-toe-tip rectangle (kg/retime/contacts.hpp says how it is sized), its "
+          "heel pair touching while the heel is planted, its tip pair while the toe tip is (near the floor "
+          "and slow, as retarget.footplants detects). Or read from a contact file (YAML version 1: patches "
+          "on named joints, vertices in the joint's frame, frame or time ranges).",
       .inputs = {{"motion", "kg.Motion", true, "the clip (its poses place the vertices)"}},
-      .outputs = {{"contacts", "kg.Contacts", true, "patches and per-frame touching vertices (metres, world)"}},
+      .outputs = {{"contacts", "kg.Contacts", true,
+                   "patches and per-frame touching vertices (metres, world)"}},
       .params = {
           ParamSpec{.name = "path",
                     .type = ParamType::InputPath,
@@ -107,8 +111,9 @@ NodeType contacts_type() {
           ParamSpec{.name = "feet",
                     .type = ParamType::String,
                     .default_value = std::string(),
-                    .doc = "comma-separated foot joints (the ankle's segment: lfoot, LeftFoot); empty: found by "
-                           "common names"},
+                    .doc =
+                        "comma-separated foot joints (the ankle's segment: lfoot, LeftFoot); empty: found by "
+                        "common names"},
           ParamSpec{.name = "heel_ratio",
                     .type = ParamType::Float,
                     .default_value = d.heel_ratio,
@@ -145,12 +150,13 @@ NodeType contacts_type() {
                     .doc = "shorter touches are dropped, seconds",
                     .min = 0.0,
                     .max = 10.0},
-          ParamSpec{.name = "rest_window_s",
-                    .type = ParamType::Float,
-                    .default_value = d.plants.rest_window_s,
-                    .doc = "s: a point's rest level is its lowest height within this window (0: the whole clip)",
-                    .min = 0.0,
-                    .max = 100.0},
+          ParamSpec{
+              .name = "rest_window_s",
+              .type = ParamType::Float,
+              .default_value = d.plants.rest_window_s,
+              .doc = "s: a point's rest level is its lowest height within this window (0: the whole clip)",
+              .min = 0.0,
+              .max = 100.0},
           ParamSpec{.name = "floor",
                     .type = ParamType::String,
                     .default_value = std::string("auto"),
@@ -161,6 +167,8 @@ NodeType contacts_type() {
 
 }  // namespace
 
-std::vector<graph::NodeType> retime_contact_node_types() { return {contacts_type()}; }
+std::vector<graph::NodeType> retime_contact_node_types() {
+  return {contacts_type()};
+}
 
 }  // namespace kg

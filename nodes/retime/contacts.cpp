@@ -45,8 +45,8 @@ std::vector<int> automatic_feet(const motion::Motion& m) {
   for (const retarget::PlantPoint& p : d.points) joints.push_back(p.point.joint);
   std::vector<int> feet;
   for (int j : joints) {
-    const bool below_another =
-        std::any_of(joints.begin(), joints.end(), [&](int other) { return is_ancestor(*m.skeleton, other, j); });
+    const bool below_another = std::any_of(joints.begin(), joints.end(),
+                                           [&](int other) { return is_ancestor(*m.skeleton, other, j); });
     if (!below_another && std::find(feet.begin(), feet.end(), j) == feet.end()) feet.push_back(j);
   }
   return feet;
@@ -98,8 +98,8 @@ Contacts assemble_contacts(const motion::Motion& m, std::vector<ContactPatch> pa
     vertex_count += patches[p].vertices.size();
   }
   if (static_cast<int>(active.size()) != m.frame_count())
-    throw std::invalid_argument("contacts: activity for " + std::to_string(active.size()) + " frames, the clip has " +
-                                std::to_string(m.frame_count()));
+    throw std::invalid_argument("contacts: activity for " + std::to_string(active.size()) +
+                                " frames, the clip has " + std::to_string(m.frame_count()));
   Contacts c;
   c.skeleton = m.skeleton;
   c.fps = m.fps;
@@ -144,7 +144,8 @@ int flattest_frame(const motion::Motion& m, int foot) {
     motion::forward_kinematics(sk, m.values.row(f), world);
     const Eigen::Isometry3d& t = world[static_cast<std::size_t>(tip_joint)];
     tip[static_cast<std::size_t>(f)] = (t * tip_local).y();
-    ball[static_cast<std::size_t>(f)] = tip_joint == foot ? tip[static_cast<std::size_t>(f)] : t.translation().y();
+    ball[static_cast<std::size_t>(f)] =
+        tip_joint == foot ? tip[static_cast<std::size_t>(f)] : t.translation().y();
   }
   auto low = [](std::vector<double> v) {
     if (v.empty()) return 0.0;
@@ -166,8 +167,8 @@ int flattest_frame(const motion::Motion& m, int foot) {
   return best;
 }
 
-ContactPatch foot_patch(const motion::Skeleton& sk, motion::FrameRef pose, int foot, const FootContactOptions& o,
-                        ContactVertex* heel_out, ContactVertex* tip_out) {
+ContactPatch foot_patch(const motion::Skeleton& sk, motion::FrameRef pose, int foot,
+                        const FootContactOptions& o, ContactVertex* heel_out, ContactVertex* tip_out) {
   if (foot < 0 || foot >= sk.joint_count())
     throw std::invalid_argument("contacts: foot joint " + std::to_string(foot) + " out of range");
   if (!(o.heel_ratio >= 0) || !std::isfinite(o.heel_ratio))
@@ -249,7 +250,8 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   }
   const retarget::FootplantDetection d = retarget::detect_footplants(m, plants);
   const int frames = m.frame_count();
-  std::vector<std::vector<bool>> active(static_cast<std::size_t>(frames), std::vector<bool>(4 * feet.size(), false));
+  std::vector<std::vector<bool>> active(static_cast<std::size_t>(frames),
+                                        std::vector<bool>(4 * feet.size(), false));
   for (const retarget::Footplant& plant : d.plants) {
     const std::size_t foot = static_cast<std::size_t>(plant.point) / 2;
     const bool is_tip = plant.point % 2 == 1;

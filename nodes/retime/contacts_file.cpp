@@ -34,13 +34,15 @@ class Reader {
     } catch (const YAML::Exception& e) {
       fail("malformed YAML: " + e.msg, e.mark);
     }
-    if (!root.IsDefined() || root.IsNull()) throw Error("empty contact file (expected 'version: 1')", {file_, 1, 1});
+    if (!root.IsDefined() || root.IsNull())
+      throw Error("empty contact file (expected 'version: 1')", {file_, 1, 1});
     if (!root.IsMap()) fail("a contact file must be a map (version, patches)", root.Mark());
     check_keys(root, "", {"version", "doc", "patches"});
     if (!root["version"]) throw Error("missing 'version: 1'", {file_, 1, 1});
     const int version = as_int(root["version"], "version");
     if (version != kContactFormatVersion)
-      fail("unsupported version " + std::to_string(version) + " (this reads version 1)", root["version"].Mark());
+      fail("unsupported version " + std::to_string(version) + " (this reads version 1)",
+           root["version"].Mark());
     if (root["doc"]) as_string(root["doc"], "doc");
     const YAML::Node ps = root["patches"];
     if (!ps) throw Error("missing 'patches' (a list of contact patches)", {file_, 1, 1});
@@ -60,7 +62,8 @@ class Reader {
     for (std::size_t p = 0; p < patches.size(); ++p) {
       for (const auto& [a, b] : ranges[p])
         for (int f = a; f <= b; ++f)
-          for (std::size_t v = 0; v < patches[p].vertices.size(); ++v) active[static_cast<std::size_t>(f)][first + v] = true;
+          for (std::size_t v = 0; v < patches[p].vertices.size(); ++v)
+            active[static_cast<std::size_t>(f)][first + v] = true;
       first += patches[p].vertices.size();
     }
     Contacts c = assemble_contacts(motion_, std::move(patches), active);
@@ -70,10 +73,12 @@ class Reader {
 
  private:
   [[noreturn]] void fail(const std::string& message, const YAML::Mark& m) const {
-    throw Error(message, m.line < 0 ? SourceLocation{file_, 0, 0} : SourceLocation{file_, m.line + 1, m.column + 1});
+    throw Error(message,
+                m.line < 0 ? SourceLocation{file_, 0, 0} : SourceLocation{file_, m.line + 1, m.column + 1});
   }
 
-  void check_keys(const YAML::Node& map, const std::string& path, const std::vector<std::string>& allowed) const {
+  void check_keys(const YAML::Node& map, const std::string& path,
+                  const std::vector<std::string>& allowed) const {
     for (auto it = map.begin(); it != map.end(); ++it) {
       const std::string key = it->first.Scalar();
       if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
@@ -117,7 +122,8 @@ class Reader {
   }
 
   Eigen::Vector3d vertex(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsSequence() || n.size() != 3) fail(what + ": expected [x, y, z] (metres, in the joint's frame)", n.Mark());
+    if (!n.IsSequence() || n.size() != 3)
+      fail(what + ": expected [x, y, z] (metres, in the joint's frame)", n.Mark());
     Eigen::Vector3d v;
     for (int i = 0; i < 3; ++i) v[i] = as_double(n[static_cast<std::size_t>(i)], what);
     if (!v.allFinite()) fail(what + ": not finite", n.Mark());
@@ -127,7 +133,8 @@ class Reader {
   // One [first, last] range in frames (or seconds when `seconds`).
   std::pair<int, int> range(const YAML::Node& n, const std::string& what, bool seconds) const {
     if (!n.IsSequence() || n.size() != 2)
-      fail(what + (seconds ? ": expected [first, last] in seconds" : ": expected [first, last] frames"), n.Mark());
+      fail(what + (seconds ? ": expected [first, last] in seconds" : ": expected [first, last] frames"),
+           n.Mark());
     int ends[2];
     for (std::size_t i = 0; i < 2; ++i) {
       const YAML::Node x = n[i];
@@ -140,8 +147,9 @@ class Reader {
       }
     }
     if (ends[0] > ends[1])
-      fail(what + ": the range [" + std::to_string(ends[0]) + ", " + std::to_string(ends[1]) + "] is reversed",
-           n.Mark());
+      fail(
+          what + ": the range [" + std::to_string(ends[0]) + ", " + std::to_string(ends[1]) + "] is reversed",
+          n.Mark());
     const int last = motion_.frame_count() - 1;
     if (ends[0] < 0 || ends[1] > last)
       fail(what + ": frames [" + std::to_string(ends[0]) + ", " + std::to_string(ends[1]) +
@@ -169,12 +177,14 @@ class Reader {
       fail(path + ".vertices: expected a non-empty list of [x, y, z] (metres)", vs.Mark());
     for (std::size_t i = 0; i < vs.size(); ++i)
       p.vertices.push_back({j, vertex(vs[i], path + ".vertices[" + std::to_string(i) + "]")});
-    if (n["frames"] && n["times"]) fail(path + ": give one of 'frames' and 'times', not both", n["times"].Mark());
+    if (n["frames"] && n["times"])
+      fail(path + ": give one of 'frames' and 'times', not both", n["times"].Mark());
     const bool seconds = !n["frames"];
     const YAML::Node rs = seconds ? n["times"] : n["frames"];
     if (!rs) fail(path + ": missing 'frames' (or 'times'): when the patch touches", n.Mark());
     const std::string what = path + (seconds ? ".times" : ".frames");
-    if (!rs.IsSequence() || rs.size() == 0) fail(what + ": expected a list of [first, last] ranges", rs.Mark());
+    if (!rs.IsSequence() || rs.size() == 0)
+      fail(what + ": expected a list of [first, last] ranges", rs.Mark());
     if (rs[0].IsScalar()) {
       ranges.push_back(range(rs, what, seconds));  // one range written flat: [first, last]
     } else {
@@ -190,7 +200,8 @@ class Reader {
 
 }  // namespace
 
-Contacts read_contacts_string(const std::string& text, const std::string& file_name, const motion::Motion& motion) {
+Contacts read_contacts_string(const std::string& text, const std::string& file_name,
+                              const motion::Motion& motion) {
   if (!motion.skeleton) throw Error("the motion has no skeleton", {file_name, 0, 0});
   return Reader(file_name, motion).read(text);
 }

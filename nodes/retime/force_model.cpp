@@ -11,9 +11,15 @@ namespace kg::retime {
 
 namespace {
 
-double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
-Eigen::Vector2d rotate_ccw(const Eigen::Vector2d& v) { return {-v.y(), v.x()}; }
-Eigen::Vector2d rotate_cw(const Eigen::Vector2d& v) { return {v.y(), -v.x()}; }
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
+Eigen::Vector2d rotate_ccw(const Eigen::Vector2d& v) {
+  return {-v.y(), v.x()};
+}
+Eigen::Vector2d rotate_cw(const Eigen::Vector2d& v) {
+  return {v.y(), -v.x()};
+}
 
 // Closest point of segment [a, b] to x.
 Eigen::Vector2d on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
@@ -40,14 +46,16 @@ void build_fan(FrameHull& h) {
                                 std::to_string(n) + " vertices");
   const Eigen::Index k = h.centre_lambda.size();
   for (const Eigen::VectorXd& l : h.lambda)
-    if (l.size() != k) throw std::invalid_argument("force model: λ sizes of the vertices and the centre differ");
+    if (l.size() != k)
+      throw std::invalid_argument("force model: λ sizes of the vertices and the centre differ");
   double extent = 1;
   for (const Eigen::Vector2d& v : h.vertices) extent = std::max(extent, v.cwiseAbs().maxCoeff());
   const double eps = 1e-9 * extent;
   const Eigen::Vector2d c = h.centre;
   if (n >= 3)
     for (int i = 0; i < n; ++i) {
-      const Eigen::Vector2d e = h.vertices[static_cast<std::size_t>((i + 1) % n)] - h.vertices[static_cast<std::size_t>(i)];
+      const Eigen::Vector2d e =
+          h.vertices[static_cast<std::size_t>((i + 1) % n)] - h.vertices[static_cast<std::size_t>(i)];
       if (cross(e, c - h.vertices[static_cast<std::size_t>(i)]) < -eps * e.norm())
         throw std::invalid_argument("force model: the centre lies outside the hull");
     }
@@ -131,7 +139,8 @@ int find_sector(const FrameHull& h, const Eigen::Vector2d& x, int hint) {
   double best_slack = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {
     const FanSector& s = h.sectors[static_cast<std::size_t>(i)];
-    const double slack = std::max({0.0, -cross(s.from, d) / (s.from.norm() * dn), -cross(d, s.to) / (s.to.norm() * dn)});
+    const double slack =
+        std::max({0.0, -cross(s.from, d) / (s.from.norm() * dn), -cross(d, s.to) / (s.to.norm() * dn)});
     if (slack < best_slack) {
       best_slack = slack;
       best = i;
@@ -229,7 +238,9 @@ HullPoint closest_point(const FrameHull& h, const Eigen::Vector2d& x, int& hint)
   if (n < 3) return closest_point_on_polygon(h.vertices, x);
   hint = find_sector(h, x, hint);
   const FanSector& s = h.sectors[static_cast<std::size_t>(hint)];
-  auto vertex = [&](int i) -> const Eigen::Vector2d& { return h.vertices[static_cast<std::size_t>(((i % n) + n) % n)]; };
+  auto vertex = [&](int i) -> const Eigen::Vector2d& {
+    return h.vertices[static_cast<std::size_t>(((i % n) + n) % n)];
+  };
   int e = s.edge;
   if (s.in_hull && cross(vertex(e + 1) - vertex(e), x - vertex(e)) >= 0) return {x, 0.0, true};
   // x is beyond edge e (or in a wedge outside at the centre): the nearest point is on the part of

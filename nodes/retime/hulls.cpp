@@ -34,7 +34,9 @@ std::string fmt(const Eigen::Vector2d& x) {
   return s.str();
 }
 
-double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 void check_options(const HullOptions& o) {
   auto positive = [](double v) { return v > 0 && std::isfinite(v); };
@@ -50,7 +52,8 @@ std::vector<bool> root_channels(const motion::Skeleton& sk) {
   std::vector<bool> root(static_cast<std::size_t>(sk.channel_count()), false);
   for (const motion::Joint& j : sk.joints())
     if (j.parent < 0)
-      for (std::size_t i = 0; i < j.channels.size(); ++i) root[static_cast<std::size_t>(j.first_channel) + i] = true;
+      for (std::size_t i = 0; i < j.channels.size(); ++i)
+        root[static_cast<std::size_t>(j.first_channel) + i] = true;
   return root;
 }
 
@@ -58,9 +61,9 @@ void check_sizes(const BodyModel& body, const FrameTorques& t) {
   if (!body.skeleton) throw std::invalid_argument("hulls: the body model has no skeleton");
   const Eigen::Index c = body.skeleton->channel_count();
   if (body.torque_min.size() != c || body.torque_max.size() != c)
-    throw std::invalid_argument("hulls: the body's torque limits have " + std::to_string(body.torque_min.size()) +
-                                " and " + std::to_string(body.torque_max.size()) + " entries for " +
-                                std::to_string(c) + " channels");
+    throw std::invalid_argument(
+        "hulls: the body's torque limits have " + std::to_string(body.torque_min.size()) + " and " +
+        std::to_string(body.torque_max.size()) + " entries for " + std::to_string(c) + " channels");
   if (t.velocity.size() != c || t.acceleration.size() != c || t.gravity.rows() != c)
     throw std::invalid_argument("hulls: the torque coefficients have " + std::to_string(t.velocity.size()) +
                                 " channels, the body " + std::to_string(c));
@@ -88,7 +91,8 @@ void make_rows(const BodyModel& body, const std::vector<bool>& root, const Frame
     const bool is_root = root[static_cast<std::size_t>(c)];
     const double lo = is_root ? 0.0 : body.torque_min[c], hi = is_root ? 0.0 : body.torque_max[c];
     if (std::isnan(lo) || std::isnan(hi) || lo > hi)
-      throw std::invalid_argument("hulls: torque limits of channel " + std::to_string(c) + " are not an interval");
+      throw std::invalid_argument("hulls: torque limits of channel " + std::to_string(c) +
+                                  " are not an interval");
     if (!is_root && lo == -kInf && hi == kInf) continue;
     rows.channel.push_back(static_cast<int>(c));
     rows.lo.push_back(lo - gravity_term);
@@ -204,15 +208,19 @@ LsResult bounded_least_squares(const LsProblem& p) {
         State& s = xs[static_cast<std::size_t>(j)];
         if (s != Free) continue;
         const double span = std::max(1.0, std::abs(x[j]));
-        if (x[j] <= p.xlo[j] + step_tol * span) s = Lower, x[j] = p.xlo[j];
-        else if (x[j] >= p.xhi[j] - step_tol * span) s = Upper, x[j] = p.xhi[j];
+        if (x[j] <= p.xlo[j] + step_tol * span)
+          s = Lower, x[j] = p.xlo[j];
+        else if (x[j] >= p.xhi[j] - step_tol * span)
+          s = Upper, x[j] = p.xhi[j];
       }
       for (Eigen::Index i = 0; i < m; ++i) {
         State& s = zs[static_cast<std::size_t>(i)];
         if (s != Free) continue;
         const double span = std::max(1.0, std::abs(z[i]));
-        if (z[i] <= p.lo[i] + step_tol * span) s = Lower, z[i] = p.lo[i];
-        else if (z[i] >= p.hi[i] - step_tol * span) s = Upper, z[i] = p.hi[i];
+        if (z[i] <= p.lo[i] + step_tol * span)
+          s = Lower, z[i] = p.lo[i];
+        else if (z[i] >= p.hi[i] - step_tol * span)
+          s = Upper, z[i] = p.hi[i];
       }
     }
   };
@@ -288,7 +296,8 @@ struct Workspace {
 class FrameLp {
  public:
   // Columns: 1 p̈, 2 ṗ², 3.. λ.
-  FrameLp(const Rows& rows, const FrameTorques& t, const Eigen::MatrixXd& N, const HullOptions& o, Workspace& w)
+  FrameLp(const Rows& rows, const FrameTorques& t, const Eigen::MatrixXd& N, const HullOptions& o,
+          Workspace& w)
       : lp_(glp_create_prob()), w_(w), columns_(static_cast<int>(N.cols())) {
     const int m = static_cast<int>(rows.channel.size());
     if (m > 0) glp_add_rows(lp_, m);
@@ -367,7 +376,8 @@ class FrameLp {
             value.push_back(1.0);
             for (int j = 0; j < columns_; ++j) {
               const double b = directions(axis == 0 ? 0 : 2, j);
-              if (column_patch[static_cast<std::size_t>(j)] != patches[static_cast<std::size_t>(q)] || b == 0) continue;
+              if (column_patch[static_cast<std::size_t>(j)] != patches[static_cast<std::size_t>(q)] || b == 0)
+                continue;
               index.push_back(3 + j);
               value.push_back(sign == 0 ? -b : b);
             }
@@ -416,7 +426,9 @@ std::uint8_t box_bits(const Eigen::Vector2d& x, const HullOptions& o) {
   return bits;
 }
 
-void append_message(FrameHull& h, const std::string& note) { h.message += (h.message.empty() ? "" : "; ") + note; }
+void append_message(FrameHull& h, const std::string& note) {
+  h.message += (h.message.empty() ? "" : "; ") + note;
+}
 
 // λ at x inside (or on) a convex polygon by interpolation between its vertices' (a fan from
 // vertex 0): the fallback when the centre LP fails numerically.
@@ -467,8 +479,8 @@ void clean_polygon(std::vector<Vertex>& v, double eps) {
 }
 
 // The single least-squares point of a frame without a hull (hulls.hpp), as its hull.
-void least_squares_hull(const BodyModel& body, const FrameTorques& t, const Rows& rows, const Eigen::MatrixXd& N,
-                        bool flight, const HullOptions& o, FrameHull& h) {
+void least_squares_hull(const BodyModel& body, const FrameTorques& t, const Rows& rows,
+                        const Eigen::MatrixXd& N, bool flight, const HullOptions& o, FrameHull& h) {
   const Eigen::Index k = flight ? 0 : N.cols();
   LsProblem p;
   std::vector<std::size_t> used;
@@ -510,9 +522,10 @@ void least_squares_hull(const BodyModel& body, const FrameTorques& t, const Rows
   h.centre_is_original = (x - Eigen::Vector2d(0, 1)).norm() <= 1e-9;
   h.residual = r.residual;
   (void)body;
-  std::string why = flight ? "flight: no contact; the least-squares point of the root's rows"
-                           : "infeasible: no timing and contact forces meet every row; the least-squares point "
-                             "of every row (bounded-variable least squares)";
+  std::string why = flight
+                        ? "flight: no contact; the least-squares point of the root's rows"
+                        : "infeasible: no timing and contact forces meet every row; the least-squares point "
+                          "of every row (bounded-variable least squares)";
   why += " is " + fmt(x) + ", residual " + fmt(r.residual);
   if (!r.converged) why += " (least squares stopped at its iteration limit)";
   append_message(h, why);
@@ -604,8 +617,10 @@ FrameHull frame_hull(const BodyModel& body, const std::vector<bool>& root, const
   }
   if (hull.size() == 1) append_message(h, "degenerate hull: a single point");
   if (hull.size() == 2) append_message(h, "degenerate hull: a segment");
-  if (limit) append_message(h, "LP limit (" + std::to_string(o.max_lps) + ") reached before the tolerance held");
-  if (failed) append_message(h, "GLPK failed on some directions (code " + std::to_string(lp.last_code()) + ")");
+  if (limit)
+    append_message(h, "LP limit (" + std::to_string(o.max_lps) + ") reached before the tolerance held");
+  if (failed)
+    append_message(h, "GLPK failed on some directions (code " + std::to_string(lp.last_code()) + ")");
 
   // The centre: λ at (0, 1), or at the hull's nearest point.
   const Eigen::Vector2d original(0, 1);
@@ -613,8 +628,8 @@ FrameHull frame_hull(const BodyModel& body, const std::vector<bool>& root, const
   h.centre_is_original = near.distance_squared <= eps * eps;
   h.centre = h.centre_is_original ? original : near.point;
   if (!h.centre_is_original)
-    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " + fmt(h.centre) + ", " +
-                          fmt(std::sqrt(near.distance_squared)) + " away");
+    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " + fmt(h.centre) +
+                          ", " + fmt(std::sqrt(near.distance_squared)) + " away");
   if (lp.minimise_patch_forces_at(h.centre, h.force_directions, h.column_patch) == FrameLp::Result::Optimal) {
     h.centre_lambda = w.lambda;
   } else {
@@ -631,15 +646,19 @@ FrameHull frame_hull(const BodyModel& body, const std::vector<bool>& root, const
 
 const char* to_string(HullStatus status) {
   switch (status) {
-    case HullStatus::Feasible: return "feasible";
-    case HullStatus::Flight: return "flight";
-    case HullStatus::Infeasible: return "infeasible";
+    case HullStatus::Feasible:
+      return "feasible";
+    case HullStatus::Flight:
+      return "flight";
+    case HullStatus::Infeasible:
+      return "infeasible";
   }
   return "?";
 }
 
 int Hulls::count(HullStatus status) const {
-  return static_cast<int>(std::count_if(frames.begin(), frames.end(), [&](const FrameHull& f) { return f.status == status; }));
+  return static_cast<int>(
+      std::count_if(frames.begin(), frames.end(), [&](const FrameHull& f) { return f.status == status; }));
 }
 
 Hulls build_hulls(const BodyModel& body, const Contacts& contacts, std::span<const FrameTorques> torques,
@@ -651,8 +670,8 @@ Hulls build_hulls(const BodyModel& body, const Contacts& contacts, std::span<con
                                 std::to_string(torques.size()) + " frames of torque coefficients");
   if (contacts.skeleton && contacts.skeleton->channel_count() != body.skeleton->channel_count())
     throw std::invalid_argument("hulls: the contacts' skeleton has " +
-                                std::to_string(contacts.skeleton->channel_count()) + " channels, the body's " +
-                                std::to_string(body.skeleton->channel_count()));
+                                std::to_string(contacts.skeleton->channel_count()) +
+                                " channels, the body's " + std::to_string(body.skeleton->channel_count()));
   Hulls out;
   out.options = options;
   out.gravity = body.gravity;
@@ -674,12 +693,12 @@ FrameHull build_frame_hull(const BodyModel& body, const ContactFrame& contact, c
   return frame_hull(body, root_channels(*body.skeleton), contact, torques, options, w);
 }
 
-double max_row_violation(const BodyModel& body, const FrameTorques& t, const FrameHull& h, const Eigen::Vector2d& x,
-                         const Eigen::VectorXd& lambda) {
+double max_row_violation(const BodyModel& body, const FrameTorques& t, const FrameHull& h,
+                         const Eigen::Vector2d& x, const Eigen::VectorXd& lambda) {
   check_sizes(body, t);
   if (lambda.size() != h.N.cols())
-    throw std::invalid_argument("hulls: " + std::to_string(lambda.size()) + " λ for " + std::to_string(h.N.cols()) +
-                                " columns");
+    throw std::invalid_argument("hulls: " + std::to_string(lambda.size()) + " λ for " +
+                                std::to_string(h.N.cols()) + " columns");
   Eigen::VectorXd tau = t.at(x.y(), x.x(), body.gravity);
   if (h.N.cols() > 0) tau.noalias() -= h.N * lambda;
   const std::vector<bool> root = root_channels(*body.skeleton);

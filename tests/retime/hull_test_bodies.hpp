@@ -35,11 +35,13 @@ inline retime::BodyModel body_of(std::shared_ptr<const motion::Skeleton> sk, dou
 }
 
 // The contact state of one pose: every listed vertex (joint, local point) touches, one patch each.
-inline retime::ContactFrame touching(std::shared_ptr<const motion::Skeleton> sk, const Eigen::RowVectorXd& pose,
+inline retime::ContactFrame touching(std::shared_ptr<const motion::Skeleton> sk,
+                                     const Eigen::RowVectorXd& pose,
                                      const std::vector<retime::ContactVertex>& vertices) {
   motion::Motion m{sk, motion::FrameMatrix(pose), 30.0, "pose"};
   std::vector<retime::ContactPatch> patches;
-  for (std::size_t i = 0; i < vertices.size(); ++i) patches.push_back({"v" + std::to_string(i), {vertices[i]}});
+  for (std::size_t i = 0; i < vertices.size(); ++i)
+    patches.push_back({std::string("v").append(std::to_string(i)), {vertices[i]}});
   return retime::assemble_contacts(m, patches, {std::vector<bool>(vertices.size(), true)}).frames.front();
 }
 
@@ -61,9 +63,10 @@ struct PointMass {
 
 inline PointMass point_mass(double mass, double mu = 0.5) {
   using motion::ChannelKind;
-  auto sk = skeleton_of({{.name = "mass",
-                          .parent = -1,
-                          .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition}}}});
+  auto sk = skeleton_of(
+      {{.name = "mass",
+        .parent = -1,
+        .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition}}}});
   PointMass pm{sk, body_of(sk, mu), mass};
   pm.body.segments[0].mass = mass;
   return pm;

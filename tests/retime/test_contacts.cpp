@@ -57,10 +57,16 @@ motion::Motion small_clip(int frames) {
   auto sk = std::make_shared<motion::Skeleton>();
   sk->add_joint({.name = "hips",
                  .parent = -1,
-                 .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition},
-                              {ChannelKind::Zrotation}, {ChannelKind::Xrotation}, {ChannelKind::Yrotation}}});
-  sk->add_joint({.name = "lhand", .parent = 0, .offset = {0.3, 0.2, 0}, .channels = {{ChannelKind::Xrotation}}});
-  sk->add_joint({.name = "rfoot", .parent = 0, .offset = {-0.1, -0.9, 0}, .channels = {{ChannelKind::Xrotation}}});
+                 .channels = {{ChannelKind::Xposition},
+                              {ChannelKind::Yposition},
+                              {ChannelKind::Zposition},
+                              {ChannelKind::Zrotation},
+                              {ChannelKind::Xrotation},
+                              {ChannelKind::Yrotation}}});
+  sk->add_joint(
+      {.name = "lhand", .parent = 0, .offset = {0.3, 0.2, 0}, .channels = {{ChannelKind::Xrotation}}});
+  sk->add_joint(
+      {.name = "rfoot", .parent = 0, .offset = {-0.1, -0.9, 0}, .channels = {{ChannelKind::Xrotation}}});
   motion::Motion m{sk, motion::FrameMatrix::Zero(frames, sk->channel_count()), 30.0, "small"};
   for (int f = 0; f < frames; ++f) {
     m.values(f, 1) = 0.95 + 0.01 * f;
@@ -120,12 +126,14 @@ TEST_CASE("N = Jᵀ P is the generalised force of the basis forces (virtual work
         motion::forward_kinematics(*m.skeleton, q, world);
         const Eigen::Vector3d minus = world[static_cast<std::size_t>(v.joint)] * v.local;
         for (int k = 0; k < 4; ++k)
-          CHECK(N(ch, 4 * static_cast<Eigen::Index>(i) + k) == Approx((plus - minus).dot(P.col(k)) / (2 * h)).margin(1e-7));
+          CHECK(N(ch, 4 * static_cast<Eigen::Index>(i) + k) ==
+                Approx((plus - minus).dot(P.col(k)) / (2 * h)).margin(1e-7));
       }
       ++i;
     }
   // A frame without contact: no column.
-  const Contacts none = assemble_contacts(m, patches, std::vector<std::vector<bool>>(5, {false, false, false}));
+  const Contacts none =
+      assemble_contacts(m, patches, std::vector<std::vector<bool>>(5, {false, false, false}));
   contact_generalised_forces(none.frames[0], none.channel_count(), mu, N);
   CHECK(N.rows() == m.skeleton->channel_count());
   CHECK(N.cols() == 0);
@@ -141,10 +149,12 @@ TEST_CASE("assemble_contacts refuses inconsistent input", "[contacts]") {
   CHECK_THROWS_WITH(assemble_contacts(m, {{"p", {{0, {0, 0, 0}}}}, {"p", {{1, {0, 0, 0}}}}},
                                       std::vector<std::vector<bool>>(3, {true, true})),
                     Catch::Contains("two patches are named 'p'"));
-  CHECK_THROWS_WITH(assemble_contacts(m, {{"p", {{0, {0, 0, 0}}}}}, std::vector<std::vector<bool>>(2, {true})),
-                    Catch::Contains("activity for 2 frames, the clip has 3"));
-  CHECK_THROWS_WITH(assemble_contacts(m, {{"p", {{0, {0, 0, 0}}}}}, std::vector<std::vector<bool>>(3, {true, false})),
-                    Catch::Contains("activity for 2 vertices"));
+  CHECK_THROWS_WITH(
+      assemble_contacts(m, {{"p", {{0, {0, 0, 0}}}}}, std::vector<std::vector<bool>>(2, {true})),
+      Catch::Contains("activity for 2 frames, the clip has 3"));
+  CHECK_THROWS_WITH(
+      assemble_contacts(m, {{"p", {{0, {0, 0, 0}}}}}, std::vector<std::vector<bool>>(3, {true, false})),
+      Catch::Contains("activity for 2 vertices"));
 }
 
 TEST_CASE("Detected feet on a real walk: heel-to-toe soles and alternating support", "[contacts]") {
@@ -173,7 +183,8 @@ TEST_CASE("Detected feet on a real walk: heel-to-toe soles and alternating suppo
     CHECK(detected.frames[static_cast<std::size_t>(flat)].touching(0));
     auto at = [&](const ContactVertex& v) { return world[static_cast<std::size_t>(v.joint)] * v.local; };
     const Eigen::Vector3d ankle = world[static_cast<std::size_t>(lfoot)].translation();
-    const Eigen::Vector3d toe_tip = world[static_cast<std::size_t>(ltoes)] * sk.joint(ltoes).end_sites.front();
+    const Eigen::Vector3d toe_tip =
+        world[static_cast<std::size_t>(ltoes)] * sk.joint(ltoes).end_sites.front();
     // A flat rectangle on the sole, heel behind the ankle, tip at the toe tip.
     for (const ContactVertex& v : p.vertices) CHECK(at(v).y() == Approx(at(p.vertices[0]).y()).margin(1e-12));
     CHECK(at(p.vertices[0]).y() < ankle.y() - 0.02);
@@ -231,7 +242,8 @@ TEST_CASE("Detected feet on a real walk: heel-to-toe soles and alternating suppo
     CHECK(c.patches[0].name == "rfoot");
     CHECK_THROWS_WITH(detect_contacts(walk, {.feet = {"lfot"}}),
                       Catch::Contains("unknown foot joint 'lfot'") && Catch::Contains("lfoot"));
-    CHECK_THROWS_WITH(detect_contacts(walk, {.feet = {"lfoot"}, .width_ratio = 0}), Catch::Contains("width_ratio"));
+    CHECK_THROWS_WITH(detect_contacts(walk, {.feet = {"lfoot"}, .width_ratio = 0}),
+                      Catch::Contains("width_ratio"));
   }
 }
 
@@ -255,7 +267,8 @@ TEST_CASE("Detected feet on the MotionBuilder BVH of the same walk", "[contacts]
   CHECK(length > 0.18);
   CHECK(length < 0.32);
   int single = 0, both = 0;
-  for (const ContactFrame& f : c.frames) (f.patches().size() == 2 ? both : single) += f.patches().size() > 0 ? 1 : 0;
+  for (const ContactFrame& f : c.frames)
+    (f.patches().size() == 2 ? both : single) += f.patches().size() > 0 ? 1 : 0;
   CHECK(single > 2 * both);
   CHECK(both > 0.1 * c.frame_count());
 }
@@ -319,12 +332,14 @@ patches:
         {"version: 1\npatch: []\n", "unknown key 'patch' (nearest: 'patches')", "bad.yaml:2:1"},
         {"version: 1\npatches: {joint: lhand}\n", "patches: expected a list", "bad.yaml:2:10"},
         {"version: 1\npatches:\n  - 3\n", "patches[0]: expected a map", "bad.yaml:3:5"},
-        {"version: 1\n" + patch + "    frames: [0, 5]\n    vertex: []\n", "unknown key 'patches[0].vertex' (nearest: 'vertices')",
-         "bad.yaml:6:5"},
-        {"version: 1\npatches:\n  - vertices: [[0, 0, 0]]\n    frames: [0, 5]\n", "patches[0]: missing 'joint'", "bad.yaml:3:5"},
+        {"version: 1\n" + patch + "    frames: [0, 5]\n    vertex: []\n",
+         "unknown key 'patches[0].vertex' (nearest: 'vertices')", "bad.yaml:6:5"},
+        {"version: 1\npatches:\n  - vertices: [[0, 0, 0]]\n    frames: [0, 5]\n",
+         "patches[0]: missing 'joint'", "bad.yaml:3:5"},
         {"version: 1\npatches:\n  - joint: lhnd\n    vertices: [[0, 0, 0]]\n    frames: [0, 5]\n",
          "patches[0].joint: unknown joint 'lhnd' (nearest: 'lhand')", "bad.yaml:3:12"},
-        {"version: 1\npatches:\n  - joint: lhand\n    frames: [0, 5]\n", "patches[0]: missing 'vertices'", "bad.yaml:3:5"},
+        {"version: 1\npatches:\n  - joint: lhand\n    frames: [0, 5]\n", "patches[0]: missing 'vertices'",
+         "bad.yaml:3:5"},
         {"version: 1\npatches:\n  - joint: lhand\n    vertices: []\n    frames: [0, 5]\n",
          "patches[0].vertices: expected a non-empty list", "bad.yaml:4:15"},
         {"version: 1\npatches:\n  - joint: lhand\n    vertices: [[0, 0]]\n    frames: [0, 5]\n",
@@ -334,23 +349,26 @@ patches:
         {"version: 1\npatches:\n  - joint: lhand\n    vertices: [[0, .nan, 0]]\n    frames: [0, 5]\n",
          "patches[0].vertices[0]: not finite", "bad.yaml:4:16"},
         {"version: 1\n" + patch, "patches[0]: missing 'frames' (or 'times')", "bad.yaml:3:5"},
-        {"version: 1\n" + patch + "    frames: [0, 5]\n    times: [0, 1]\n", "give one of 'frames' and 'times'",
-         "bad.yaml:6:12"},
-        {"version: 1\n" + patch + "    frames: [9, 5]\n", "patches[0].frames: the range [9, 5] is reversed", "bad.yaml:5:13"},
+        {"version: 1\n" + patch + "    frames: [0, 5]\n    times: [0, 1]\n",
+         "give one of 'frames' and 'times'", "bad.yaml:6:12"},
+        {"version: 1\n" + patch + "    frames: [9, 5]\n", "patches[0].frames: the range [9, 5] is reversed",
+         "bad.yaml:5:13"},
         {"version: 1\n" + patch + "    frames: [[0, 5], [50, 60]]\n",
          "patches[0].frames[1]: frames [50, 60] are outside the clip (frames 0..59)", "bad.yaml:5:22"},
-        {"version: 1\n" + patch + "    frames: [[0, 5, 6]]\n", "patches[0].frames[0]: expected [first, last] frames",
-         "bad.yaml:5:14"},
-        {"version: 1\n" + patch + "    frames: []\n", "patches[0].frames: expected a list of [first, last] ranges",
-         "bad.yaml:5:13"},
-        {"version: 1\n" + patch + "    frames: [0, 2.5]\n", "patches[0].frames: expected an integer, got '2.5'",
-         "bad.yaml:5:17"},
-        {"version: 1\n" + patch + "    times: [-1, 0.5]\n", "patches[0].times: a time must be finite and >= 0 s",
-         "bad.yaml:5:13"},
-        {"version: 1\n" + patch + "    times: [0, 3]\n", "patches[0].times: frames [0, 90] are outside the clip",
-         "bad.yaml:5:12"},
-        {"version: 1\n" + patch + "    frames: [0, 5]\n" + "  - joint: lhand\n    vertices: [[0, 0, 0]]\n    frames: [0, 5]\n",
-         "patches[1].name: a patch named 'lhand' is already defined (name the patches apart)", "bad.yaml:6:5"},
+        {"version: 1\n" + patch + "    frames: [[0, 5, 6]]\n",
+         "patches[0].frames[0]: expected [first, last] frames", "bad.yaml:5:14"},
+        {"version: 1\n" + patch + "    frames: []\n",
+         "patches[0].frames: expected a list of [first, last] ranges", "bad.yaml:5:13"},
+        {"version: 1\n" + patch + "    frames: [0, 2.5]\n",
+         "patches[0].frames: expected an integer, got '2.5'", "bad.yaml:5:17"},
+        {"version: 1\n" + patch + "    times: [-1, 0.5]\n",
+         "patches[0].times: a time must be finite and >= 0 s", "bad.yaml:5:13"},
+        {"version: 1\n" + patch + "    times: [0, 3]\n",
+         "patches[0].times: frames [0, 90] are outside the clip", "bad.yaml:5:12"},
+        {"version: 1\n" + patch + "    frames: [0, 5]\n" +
+             "  - joint: lhand\n    vertices: [[0, 0, 0]]\n    frames: [0, 5]\n",
+         "patches[1].name: a patch named 'lhand' is already defined (name the patches apart)",
+         "bad.yaml:6:5"},
     };
     for (const Bad& b : bad) {
       INFO(b.text);
@@ -362,7 +380,8 @@ patches:
         CHECK_THAT(e.what(), Catch::StartsWith(b.where));
       }
     }
-    CHECK_THROWS_WITH(read_contacts_file("/nonexistent/contacts.yaml", m), Catch::Contains("/nonexistent/contacts.yaml"));
+    CHECK_THROWS_WITH(read_contacts_file("/nonexistent/contacts.yaml", m),
+                      Catch::Contains("/nonexistent/contacts.yaml"));
   }
 }
 
@@ -371,11 +390,13 @@ TEST_CASE("The retime.contacts node", "[contacts][nodes]") {
   SECTION("from a file") {
     const motion::Motion m = small_clip(40);
     test::TempDir dir;
-    const auto path = dir.write("c.yaml", "version: 1\npatches:\n  - joint: rfoot\n    vertices: [[0, 0, 0], [0.1, 0, 0]]\n"
-                                          "    frames: [[0, 9], [20, 24]]\n");
-    const test::NodeContext ctx = test::run_node(registry, "retime.contacts",
-                                                 test::params_for(registry, "retime.contacts", {{"path", path.string()}}),
-                                                 {{"motion", graph::Value::make(m)}});
+    const auto path =
+        dir.write("c.yaml",
+                  "version: 1\npatches:\n  - joint: rfoot\n    vertices: [[0, 0, 0], [0.1, 0, 0]]\n"
+                  "    frames: [[0, 9], [20, 24]]\n");
+    const test::NodeContext ctx = test::run_node(
+        registry, "retime.contacts", test::params_for(registry, "retime.contacts", {{"path", path.string()}}),
+        {{"motion", graph::Value::make(m)}});
     const Contacts& c = ctx.outputs.at("contacts").get<Contacts>();
     CHECK(c.frame_count() == 40);
     CHECK(std::get<std::int64_t>(ctx.figures.at("patches")) == 1);
@@ -386,16 +407,18 @@ TEST_CASE("The retime.contacts node", "[contacts][nodes]") {
   }
   SECTION("detected, and bad params") {
     const std::string asf = kData + "/cmu/asf_amc/16.asf", amc = kData + "/cmu/asf_amc/16_15.amc";
-    CHECK_THROWS_WITH(registry.create_node("retime.contacts", test::params_for(registry, "retime.contacts",
-                                                                               {{"floor", std::string("low")}})),
-                      Catch::Contains("floor 'low'"));
+    CHECK_THROWS_WITH(
+        registry.create_node("retime.contacts",
+                             test::params_for(registry, "retime.contacts", {{"floor", std::string("low")}})),
+        Catch::Contains("floor 'low'"));
     if (!std::filesystem::exists(asf) || !std::filesystem::exists(amc)) {
       WARN("skipped: " << amc << " not found");
       return;
     }
     const motion::Motion walk = io::import_asf_amc(asf, amc, {}).motion;
     const test::NodeContext ctx =
-        test::run_node(registry, "retime.contacts", test::params_for(registry, "retime.contacts", {{"feet", std::string("lfoot, rfoot")}}),
+        test::run_node(registry, "retime.contacts",
+                       test::params_for(registry, "retime.contacts", {{"feet", std::string("lfoot, rfoot")}}),
                        {{"motion", graph::Value::make(walk)}});
     CHECK(std::get<std::int64_t>(ctx.figures.at("patches")) == 2);
     CHECK(std::get<std::int64_t>(ctx.figures.at("frames_without_contact")) == 0);

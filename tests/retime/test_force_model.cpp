@@ -17,7 +17,9 @@ namespace {
 
 constexpr double kG = 9.81;
 
-double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 struct Case {
   std::string name;
@@ -32,10 +34,12 @@ std::vector<Case> cases() {
   const auto pm = kg::test::point_mass(2.0);
   const Eigen::RowVectorXd origin = Eigen::RowVectorXd::Zero(3);
   const ContactFrame square =
-      touching(pm.skeleton, origin, {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}});
+      touching(pm.skeleton, origin,
+               {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}});
   {
     const FrameTorques t = pm.torques({1, 0.2, 0.5}, {0.5, 2, 0});
-    out.push_back({"point mass, four vertices, centre inside", pm.body, t, build_frame_hull(pm.body, square, t, {})});
+    out.push_back(
+        {"point mass, four vertices, centre inside", pm.body, t, build_frame_hull(pm.body, square, t, {})});
   }
   {
     const FrameTorques t = pm.torques({1, 0, 0}, {0, -12, 0});  // apex at (0, 0.8175) is the centre
@@ -45,15 +49,16 @@ std::vector<Case> cases() {
     const auto l = kg::test::leg(2.0, 2 * (kG + 1.2));  // ṗ² <= 0.6: (0, 1) above the top edge
     const FrameTorques t = l.torques({1, 0, 0}, {0, 2, 0});
     out.push_back({"leg, centre on an edge", l.body, t,
-                   build_frame_hull(l.body, touching(l.skeleton, l.pose(), {{1, {0, 0, 0}}, {1, {0.1, 0, 0}}}), t, {})});
+                   build_frame_hull(
+                       l.body, touching(l.skeleton, l.pose(), {{1, {0, 0, 0}}, {1, {0.1, 0, 0}}}), t, {})});
   }
   {
     const auto box = kg::test::planar_box(10.0, 0.9);
     const Eigen::RowVectorXd pose = (Eigen::RowVectorXd(4) << 0, 0.5, 0, 0.05).finished();
     const FrameTorques t = box.torques({1, 0.1, 0.3, 0.2}, {0.3, 3, 0, -0.4});
-    const ContactFrame corners = touching(box.skeleton, pose,
-                                          {{0, {-0.2, -0.5, 0.2}}, {0, {0.2, -0.5, 0.2}}, {0, {0.2, -0.5, -0.2}},
-                                           {0, {-0.2, -0.5, -0.2}}});
+    const ContactFrame corners = touching(
+        box.skeleton, pose,
+        {{0, {-0.2, -0.5, 0.2}}, {0, {0.2, -0.5, 0.2}}, {0, {0.2, -0.5, -0.2}}, {0, {-0.2, -0.5, -0.2}}});
     out.push_back({"box on four corners", box.body, t, build_frame_hull(box.body, corners, t, {})});
   }
   return out;
@@ -148,7 +153,8 @@ TEST_CASE("The sectors cover the plane and λ is continuous across them", "[forc
   }
 }
 
-TEST_CASE("Outside the hull λ extends linearly; at a boundary centre, constant along the normals", "[force_model]") {
+TEST_CASE("Outside the hull λ extends linearly; at a boundary centre, constant along the normals",
+          "[force_model]") {
   std::vector<Case> all = cases();
   const Case& vertex = all[1];
   INFO(vertex.hull.message);
@@ -224,7 +230,8 @@ TEST_CASE("τ is affine per sector and equals the rows at λ(p̈, ṗ²)", "[for
   }
   const Case c = cases().front();
   SectorTorques st;
-  CHECK_THROWS_WITH(sector_torques(c.hull, -1, c.torques, c.body.gravity, st), Catch::Contains("out of range"));
+  CHECK_THROWS_WITH(sector_torques(c.hull, -1, c.torques, c.body.gravity, st),
+                    Catch::Contains("out of range"));
 }
 
 TEST_CASE("Patch forces: Newton's law for the point mass, centres of pressure on the sole", "[force_model]") {
@@ -234,8 +241,9 @@ TEST_CASE("Patch forces: Newton's law for the point mass, centres of pressure on
   // Two patches: a square sole and a point.
   motion::Motion m{pm.skeleton, motion::FrameMatrix::Zero(1, 3), 30.0, "pose"};
   const Contacts contacts = assemble_contacts(
-      m, {{"sole", {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}}},
-          {"stick", {{0, {0.5, 0.3, 0}}}}},
+      m,
+      {{"sole", {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}}},
+       {"stick", {{0, {0.5, 0.3, 0}}}}},
       {{true, true, true, true, true}});
   const FrameHull h = build_frame_hull(pm.body, contacts.frames[0], t, {});
   std::mt19937 rng(9);

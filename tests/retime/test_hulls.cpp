@@ -81,7 +81,8 @@ TEST_CASE("A point mass on the floor: the hull is the friction cone's triangle",
   SECTION("four vertices (a square sole): the same cone, sixteen λ") {
     const FrameHull h = build_frame_hull(
         pm.body,
-        touching(pm.skeleton, pose, {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}}),
+        touching(pm.skeleton, pose,
+                 {{0, {0.1, 0, 0.1}}, {0, {-0.1, 0, 0.1}}, {0, {-0.1, 0, -0.1}}, {0, {0.1, 0, -0.1}}}),
         t, {});
     check_vertices(h, triangle, 1e-6);
     check_vertex_lambdas(pm.body, t, h, 1e-6);
@@ -94,7 +95,8 @@ TEST_CASE("Hull vertices on the box say so", "[hulls]") {
   // until the box |p̈| <= 20, ṗ² <= 16 cuts it.
   const auto pm = kg::test::point_mass(2.0);
   const FrameTorques t = pm.torques({1, 0, 0}, {0, 2, 0});
-  const FrameHull h = build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}), t, {});
+  const FrameHull h =
+      build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}), t, {});
   const double s1 = (40 - kG) / 2;
   check_vertices(h, {{-kG / 2, 0}, {kG / 2, 0}, {20, s1}, {20, 16}, {-20, 16}, {-20, s1}}, 1e-6);
   for (std::size_t i = 0; i < h.vertices.size(); ++i) {
@@ -105,9 +107,11 @@ TEST_CASE("Hull vertices on the box say so", "[hulls]") {
     CHECK(h.on_box[i] == want);
   }
   SECTION("another box") {
-    const FrameHull small = build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}),
-                                             t, {.pddot_max = 8, .pdot2_max = 4});
-    check_vertices(small, {{-kG / 2, 0}, {kG / 2, 0}, {8, (16 - kG) / 2}, {8, 4}, {-8, 4}, {-8, (16 - kG) / 2}}, 1e-6);
+    const FrameHull small =
+        build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}), t,
+                         {.pddot_max = 8, .pdot2_max = 4});
+    check_vertices(
+        small, {{-kG / 2, 0}, {kG / 2, 0}, {8, (16 - kG) / 2}, {8, 4}, {-8, 4}, {-8, (16 - kG) / 2}}, 1e-6);
   }
 }
 
@@ -128,7 +132,8 @@ TEST_CASE("Torque limits cut the hull: a point mass on a force-limited leg", "[h
     // vertical row against the leg's excess, at ṗ² = 0: residual (m g − F) / √2.
     const auto weak = kg::test::leg(2.0, 10.0);
     const FrameTorques tw = weak.torques({0, 0, 0}, {0, 2, 0});
-    const FrameHull hw = build_frame_hull(weak.body, touching(weak.skeleton, weak.pose(), {{1, {0, 0, 0}}}), tw, {});
+    const FrameHull hw =
+        build_frame_hull(weak.body, touching(weak.skeleton, weak.pose(), {{1, {0, 0, 0}}}), tw, {});
     INFO(describe(hw));
     CHECK(hw.status == HullStatus::Infeasible);
     REQUIRE(hw.vertices.size() == 1);
@@ -158,8 +163,10 @@ TEST_CASE("A box on two corners: tipping, not friction, limits how fast it may s
   const FrameTorques t = box.torques({1, 0, 0, 0}, {0, 3, 0, 0});
   const Eigen::RowVectorXd pose = (Eigen::RowVectorXd(4) << 0, hh / 2, 0, 0).finished();
   const ContactFrame corners = touching(box.skeleton, pose,
-                                        {{0, {-w / 2, -hh / 2, 0.2}}, {0, {w / 2, -hh / 2, 0.2}},
-                                         {0, {w / 2, -hh / 2, -0.2}}, {0, {-w / 2, -hh / 2, -0.2}}});
+                                        {{0, {-w / 2, -hh / 2, 0.2}},
+                                         {0, {w / 2, -hh / 2, 0.2}},
+                                         {0, {w / 2, -hh / 2, -0.2}},
+                                         {0, {-w / 2, -hh / 2, -0.2}}});
   const FrameHull h = build_frame_hull(box.body, corners, t, {});
   const double top = 0.25 * (3 * 16 + kG);  // at the box's ṗ² = 16
   check_vertices(h, {{-0.25 * kG, 0}, {0.25 * kG, 0}, {top, 16}, {-top, 16}}, 1e-6);
@@ -191,7 +198,8 @@ TEST_CASE("A box tipping about an edge has one timing per speed: a segment", "[h
   REQUIRE(h.vertices.size() == 2);
   CHECK(h.message.find("segment") != std::string::npos);
   // Both ends on the line I_p (α ṗ² + ω p̈) = torque.
-  for (const Eigen::Vector2d& v : h.vertices) CHECK(ip * (alpha * v.y() + omega * v.x()) == Approx(torque).epsilon(1e-7));
+  for (const Eigen::Vector2d& v : h.vertices)
+    CHECK(ip * (alpha * v.y() + omega * v.x()) == Approx(torque).epsilon(1e-7));
   // The ends: where the line meets the cone (f = m (c'' s + c' a − g) in |f_x| <= μ f_y, f_y >= 0)
   // or the box, found here along the line by its parameter s.
   auto a_of = [&](double s) { return (torque / ip - alpha * s) / omega; };
@@ -257,7 +265,8 @@ TEST_CASE("Flight frames: the least-squares point of the root's rows", "[hulls]"
   }
   SECTION("the box bounds it too") {
     // Rows m (−4.905 ṗ² + 9.81): ṗ² = 2 exactly, but the box stops at 1.5.
-    const FrameHull h = build_frame_hull(pm.body, none, pm.torques({0, 0, 0}, {0, -kG / 2, 0}), {.pdot2_max = 1.5});
+    const FrameHull h =
+        build_frame_hull(pm.body, none, pm.torques({0, 0, 0}, {0, -kG / 2, 0}), {.pdot2_max = 1.5});
     CHECK(h.vertices[0].y() == Approx(1.5));
     CHECK(h.on_box[0] == kBoxPdot2Max);
   }
@@ -270,7 +279,8 @@ TEST_CASE("The centre: minimal summed patch forces at (0, 1), or the nearest hul
     // q' = (1, 0, 0), q'' = (1, 0, 0): at (0, 1) the feet must give F = (2, 19.62, 0) together; the
     // summed L1 norms are at least |F_x| + F_y, reached only without opposing horizontal forces.
     const FrameTorques t = pm.torques({1, 0, 0}, {1, 0, 0});
-    const FrameHull h = build_frame_hull(pm.body, touching(pm.skeleton, pose, {{0, {0.2, 0, 0}}, {0, {-0.2, 0, 0}}}), t, {});
+    const FrameHull h =
+        build_frame_hull(pm.body, touching(pm.skeleton, pose, {{0, {0.2, 0, 0}}, {0, {-0.2, 0, 0}}}), t, {});
     REQUIRE(h.centre_is_original);
     const std::vector<PatchForce> f = patch_forces(h, h.centre_lambda);
     REQUIRE(f.size() == 2);
@@ -318,7 +328,8 @@ TEST_CASE("build_hulls runs a clip frame by frame and counts the statuses", "[hu
                       Catch::Contains("3 contact frames but 2 frames"));
     CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.tolerance = 0}), Catch::Contains("tolerance"));
     CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.pddot_max = -1}), Catch::Contains("box"));
-    CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.initial_directions = 2}), Catch::Contains("initial_directions"));
+    CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.initial_directions = 2}),
+                      Catch::Contains("initial_directions"));
     BodyModel short_limits = pm.body;
     short_limits.torque_max.resize(2);
     CHECK_THROWS_WITH(build_hulls(short_limits, c, t, {}), Catch::Contains("torque limits"));

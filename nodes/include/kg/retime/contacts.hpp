@@ -48,21 +48,21 @@ namespace kg::retime {
 
 // A point fixed on a segment.
 struct ContactVertex {
-  int joint = 0;                                      // skeleton joint index
-  Eigen::Vector3d local = Eigen::Vector3d::Zero();    // metres, in the joint's frame
+  int joint = 0;                                    // skeleton joint index
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();  // metres, in the joint's frame
 };
 
 // A polygonal contact area: vertices in order around it (a single vertex is a point contact).
 struct ContactPatch {
-  std::string name;                      // unique within Contacts ("lfoot", a file's name)
+  std::string name;                       // unique within Contacts ("lfoot", a file's name)
   std::vector<ContactVertex> vertices{};  // >= 1
 };
 
 // One touching vertex at one frame.
 struct ContactPoint {
-  int patch = 0;                                        // index into Contacts::patches
-  int vertex = 0;                                       // index into that patch's vertices
-  Eigen::Vector3d world = Eigen::Vector3d::Zero();      // metres, world frame
+  int patch = 0;                                    // index into Contacts::patches
+  int vertex = 0;                                   // index into that patch's vertices
+  Eigen::Vector3d world = Eigen::Vector3d::Zero();  // metres, world frame
   // d world / d channel values: 3 x channel_count (metres per metre or per radian), the same
   // generalised coordinates as the dynamics (kg::motion::point_jacobian).
   Eigen::Matrix<double, 3, Eigen::Dynamic> jacobian{};
@@ -73,16 +73,16 @@ struct ContactFrame {
   std::vector<ContactPoint> points{};  // touching vertices, by patch then vertex (may be empty: flight)
 
   bool touching(int patch) const;
-  std::vector<int> patches() const;    // patches with a touching vertex, increasing
+  std::vector<int> patches() const;  // patches with a touching vertex, increasing
 };
 
 struct Contacts {
   std::shared_ptr<const motion::Skeleton> skeleton;  // shared, immutable
   std::vector<ContactPatch> patches{};
-  std::vector<ContactFrame> frames{};    // one per frame of the clip
-  double fps = 30.0;                     // the clip's frame rate
-  std::string source;                    // "detected" or the contact file's path
-  std::vector<std::string> notes{};      // what detection chose (feet, floor), for people
+  std::vector<ContactFrame> frames{};  // one per frame of the clip
+  double fps = 30.0;                   // the clip's frame rate
+  std::string source;                  // "detected" or the contact file's path
+  std::vector<std::string> notes{};    // what detection chose (feet, floor), for people
 
   int frame_count() const { return static_cast<int>(frames.size()); }
   int channel_count() const { return skeleton ? skeleton->channel_count() : 0; }
@@ -122,7 +122,8 @@ struct FootContactOptions {
 // std::invalid_argument for a joint out of range, options out of range, or a foot whose tip is not
 // ahead of its ankle horizontally in that pose.
 ContactPatch foot_patch(const motion::Skeleton& skeleton, motion::FrameRef pose, int foot_joint,
-                        const FootContactOptions& options, ContactVertex* heel = nullptr, ContactVertex* tip = nullptr);
+                        const FootContactOptions& options, ContactVertex* heel = nullptr,
+                        ContactVertex* tip = nullptr);
 
 // The frame where the foot's ball and toe tip are both nearest their lowest heights over the clip
 // (5th percentiles): max(ball − its low, tip − its low) is least. 0 for an empty clip.
@@ -153,7 +154,8 @@ inline constexpr int kContactFormatVersion = 1;
 
 // Throws kg::graph::Error with file:line:column.
 Contacts read_contacts_file(const std::string& path, const motion::Motion& motion);
-Contacts read_contacts_string(const std::string& text, const std::string& file_name, const motion::Motion& motion);
+Contacts read_contacts_string(const std::string& text, const std::string& file_name,
+                              const motion::Motion& motion);
 
 // ---- friction and generalised forces -------------------------------------------------------
 

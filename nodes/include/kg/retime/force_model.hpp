@@ -56,8 +56,8 @@ void lambda_at(const FrameHull& hull, const Eigen::Vector2d& x, int& hint, Eigen
 struct SectorTorques {
   Eigen::VectorXd t0{}, pddot{}, pdot2{};
 };
-void sector_torques(const FrameHull& hull, int sector, const FrameTorques& torques, const Eigen::Vector3d& gravity,
-                    SectorTorques& out);
+void sector_torques(const FrameHull& hull, int sector, const FrameTorques& torques,
+                    const Eigen::Vector3d& gravity, SectorTorques& out);
 
 // The contact force on each touching patch (world, newtons) and its centre of pressure (world,
 // metres: the vertices' points weighted by their vertical forces; their mean when no vertical

@@ -81,24 +81,24 @@ inline constexpr std::uint8_t kBoxPddotMin = 1, kBoxPddotMax = 2, kBoxPdot2Max =
 struct FanSector {
   Eigen::Vector2d from = Eigen::Vector2d::Zero();  // plane units, centre -> node
   Eigen::Vector2d to = Eigen::Vector2d::Zero();
-  int edge = 0;              // hull edge (vertex edge -> edge + 1) this sector faces or touches
-  bool in_hull = false;      // the triangle (centre, from, to) is part of the hull (a fan triangle);
-                             // false: a wedge outside the hull (the centre on its boundary)
+  int edge = 0;          // hull edge (vertex edge -> edge + 1) this sector faces or touches
+  bool in_hull = false;  // the triangle (centre, from, to) is part of the hull (a fan triangle);
+                         // false: a wedge outside the hull (the centre on its boundary)
   Eigen::VectorXd lambda0{}, lambda_pddot{}, lambda_pdot2{};
 };
 
 struct FrameHull {
   HullStatus status = HullStatus::Feasible;
-  std::string message;                     // why (Flight, Infeasible) and notes: centre outside,
-                                           // degenerate hull, LP limit reached; "" when none
+  std::string message;                      // why (Flight, Infeasible) and notes: centre outside,
+                                            // degenerate hull, LP limit reached; "" when none
   std::vector<Eigen::Vector2d> vertices{};  // (p̈, ṗ²), counter-clockwise: 1 (a point), 2 (a
                                             // segment) or more
   std::vector<Eigen::VectorXd> lambda{};    // per vertex: λ, newtons, >= 0, one per column of N
   std::vector<std::uint8_t> on_box{};       // per vertex: kBox* bits
   Eigen::Vector2d centre{0.0, 1.0};         // (p̈, ṗ²)
   Eigen::VectorXd centre_lambda{};
-  bool centre_is_original = true;           // centre == (0, 1); false: (0, 1) lies outside
-  int lp_count = 0;                         // LPs solved for this frame (centre included)
+  bool centre_is_original = true;  // centre == (0, 1); false: (0, 1) lies outside
+  int lp_count = 0;                // LPs solved for this frame (centre included)
   // Flight, Infeasible: Euclidean norm of the rows' violations at the point (N and N m mixed, as
   // the rows are); Feasible: 0.
   double residual = 0;
@@ -109,13 +109,13 @@ struct FrameHull {
   Eigen::Matrix3Xd points{};            // 3 x columns: world point the force acts at, metres
   std::vector<int> column_patch{};      // per column: index into Contacts::patches
 
-  std::vector<FanSector> sectors{};     // the force model's fan (force_model.hpp), >= 3 sectors
+  std::vector<FanSector> sectors{};  // the force model's fan (force_model.hpp), >= 3 sectors
 
   int column_count() const { return static_cast<int>(N.cols()); }
 };
 
 struct Hulls {
-  std::vector<FrameHull> frames{};        // one per frame of the clip
+  std::vector<FrameHull> frames{};  // one per frame of the clip
   HullOptions options{};
   Eigen::Vector3d gravity{0.0, -9.81, 0.0};  // m/s², world: the body's, used by every row
   double friction = 0.5;
