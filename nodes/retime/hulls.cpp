@@ -228,31 +228,42 @@ LsResult bounded_least_squares(const LsProblem& p) {
   settle();
   const int max_outer = 4 * static_cast<int>(n + m) + 20;
   Eigen::VectorXd residual(m), grad(n);
-  Eigen::Index last_freed = -1;
+  auto objective = [&]() {
+    return 0.5 * (p.G * x + p.e - z).squaredNorm() +
+           0.5 * (p.reg.cwiseProduct((x - p.ref).cwiseAbs2())).sum();
+  };
+  // A variable freed without lowering the objective (rounding sent it straight back to its
+  // bound) is not freed again until something else moves: no cycling.
+  std::vector<Eigen::Index> stuck;
   for (r.iterations = 0; r.iterations < max_outer; ++r.iterations) {
     residual = p.G * x + p.e - z;
     grad = p.G.transpose() * residual + p.reg.cwiseProduct(x - p.ref);
+    auto allowed = [&](Eigen::Index v) { return std::find(stuck.begin(), stuck.end(), v) == stuck.end(); };
     // The bound variable whose gradient most wants it to leave its bound.
     double worst = tol;
     Eigen::Index pick = -1;
     for (Eigen::Index j = 0; j < n; ++j) {
       const State s = xs[static_cast<std::size_t>(j)];
       const double want = s == Lower ? -grad[j] : s == Upper ? grad[j] : 0.0;
-      if (want > worst && j != last_freed) worst = want, pick = j;
+      if (want > worst && allowed(j)) worst = want, pick = j;
     }
     for (Eigen::Index i = 0; i < m; ++i) {
       const State s = zs[static_cast<std::size_t>(i)];
       if (s == Free || p.lo[i] == p.hi[i]) continue;
       const double want = s == Lower ? residual[i] : -residual[i];  // d/dz = −residual
-      if (want > worst && n + i != last_freed) worst = want, pick = n + i;
+      if (want > worst && allowed(n + i)) worst = want, pick = n + i;
     }
     if (pick < 0) break;
     if (pick < n)
       xs[static_cast<std::size_t>(pick)] = Free;
     else
       zs[static_cast<std::size_t>(pick - n)] = Free;
-    last_freed = pick;
+    const double before = objective();
     settle();
+    if (objective() < before - 1e-14 * (1 + before))
+      stuck.clear();
+    else
+      stuck.push_back(pick);
   }
   r.converged = r.iterations < max_outer;
   const Eigen::VectorXd tau = p.G * x + p.e;

@@ -106,6 +106,15 @@ TEST_CASE("Hull vertices on the box say so", "[hulls]") {
     if (h.vertices[i].y() > 15.99) want |= kBoxPdot2Max;
     CHECK(h.on_box[i] == want);
   }
+  SECTION("an LP budget too small for the tolerance is reported") {
+    const FrameHull few =
+        build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}), t,
+                         {.initial_directions = 3, .max_lps = 4});
+    INFO(describe(few));
+    CHECK(few.message.find("LP limit (4) reached") != std::string::npos);
+    CHECK(few.lp_count == 5);  // the budget, then the centre
+    check_vertex_lambdas(pm.body, t, few, 1e-6);
+  }
   SECTION("another box") {
     const FrameHull small =
         build_frame_hull(pm.body, touching(pm.skeleton, Eigen::RowVectorXd::Zero(3), {{0, {0, 0, 0}}}), t,

@@ -15,7 +15,8 @@
 // when it lies more than `tolerance` beyond the edge, recursively, until every edge holds. Between
 // directions only the objective changes: GLPK restarts from the previous optimal basis (primal
 // simplex, presolver off). The found polygon lies inside the true projection (its vertices are
-// feasible) and no true point lies more than `tolerance` outside it. λ is kept at every vertex.
+// feasible) and the true projection lies inside the found polygon with every edge pushed out by
+// `tolerance` (fig. 4). λ is kept at every vertex.
 //
 // The box: unbounded directions (a standing frame allows any timing) are cut by
 // |p̈| <= pddot_max and ṗ² <= pdot2_max; vertices on the box say so (on_box). ṗ² >= 0 is physics.
