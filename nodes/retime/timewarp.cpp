@@ -144,4 +144,35 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
   return warp;
 }
 
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments) {
+  if (output_times.size() != source_times.size() || output_times.size() < 2)
+    throw std::invalid_argument("time warp fit: " + std::to_string(output_times.size()) + " output times and " +
+                                std::to_string(source_times.size()) + " source times (expected equal, >= 2)");
+  const double duration = output_times.back(), source_duration = source_times.back();
+  check_sizes(source_duration, duration, segments);
+  const int controls = segments + 3;
+  // Normal equations of the fit, bordered by the two end rows (KKT).
+  const WarpConstraints ends = warp_constraints(source_duration, duration, segments, {});
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(controls + 2, controls + 2);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(controls + 2);
+  for (std::size_t k = 0; k < output_times.size(); ++k) {
+    const WarpSample s = basis(duration, segments, output_times[k]);
+    for (int i = 0; i < 4; ++i) {
+      rhs[s.first + i] += s.weight[i] * source_times[k];
+      for (int j = 0; j < 4; ++j) kkt(s.first + i, s.first + j) += s.weight[i] * s.weight[j];
+    }
+  }
+  // A whisper of smoothness keeps controls that no sample reaches determined.
+  for (int j = 0; j + 1 < controls; ++j) {
+    const double w = 1e-9;
+    kkt(j, j) += w, kkt(j + 1, j + 1) += w, kkt(j, j + 1) -= w, kkt(j + 1, j) -= w;
+  }
+  kkt.block(controls, 0, 2, controls) = ends.A;
+  kkt.block(0, controls, controls, 2) = ends.A.transpose();
+  rhs.tail(2) = ends.b;
+  const Eigen::VectorXd solution = kkt.fullPivLu().solve(rhs);
+  TimeWarp warp{duration, source_duration, std::vector<double>(solution.data(), solution.data() + controls)};
+  return warp;
+}
+
 }  // namespace kg::retime

@@ -72,6 +72,12 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
 // (naming the closest pair of pins) when `segments` is too coarse to pass the pins increasingly.
 TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
 
+// The warp of `segments` segments over [0, duration] closest in least squares to the playback
+// samples (output_times[i], source_times[i]) with the ends kept exactly (the first and last
+// sample's source times at 0 and duration). Sizes must agree (>= 2 samples); throws
+// std::invalid_argument otherwise. The result need not increase strictly if the samples do not.
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments);
+
 }  // namespace kg::retime
 
 KG_DECLARE_TYPE(kg::retime::TimeWarp, "kg.TimeWarp")
