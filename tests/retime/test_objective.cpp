@@ -2,35 +2,48 @@
 
 #include <random>
 
+#include "kg/retime/force_model.hpp"
 #include "kg/retime/objective.hpp"
 
 using namespace kg::retime;
 
 namespace {
 
-// Frames of a 2 s clip at 30 fps: a box hull |p̈| <= 60, 0.1 <= ṗ² <= 30 whose torque term prefers
-// the original timing, and a flight second (source 0.5 to 1.5 s) whose polytope is empty: the
-// single point (0, 1).
-BakedObjective box_and_flight(double alpha) {
-  BakedObjective objective(30, alpha);
+// A 2 s clip at 30 fps of a body with two channels and no contact columns: τ = (ṗ² − 1, 0.5 p̈),
+// so the torque term against τ' = 0 is (ṗ² − 1)² + 0.25 p̈² (times 0.01). Its hull is a box
+// |p̈| <= 60, 0.1 <= ṗ² <= 30, except for a flight second (source 0.5 to 1.5 s) whose polytope is
+// empty: the single point (0, 1).
+struct BoxAndFlight {
+  Hulls hulls;
+  std::vector<FrameTorques> torques;
+  std::vector<Eigen::VectorXd> targets;
+};
+
+BoxAndFlight box_and_flight() {
+  BoxAndFlight c;
+  FrameTorques t;
+  t.velocity = Eigen::Vector2d(1, 0);
+  t.acceleration = Eigen::Vector2d(0, 0.5);
+  t.gravity = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(2, 3);
+  t.gravity(0, 1) = 1 / 9.81;  // g = (0, -9.81, 0) gives -1
   for (int f = 0; f <= 60; ++f) {
-    BakedFrame frame;
-    const bool flight = f >= 15 && f <= 45;
-    // τ = (ṗ² − 1, 0.5 p̈) against τ' = 0: a torque term (ṗ² − 1)² + 0.25 p̈².
-    const Quadratic q = bake_quadratic(Eigen::Vector2d(-1, 0), Eigen::Vector2d(0, 0.5), Eigen::Vector2d(1, 0),
-                                       Eigen::Vector2d::Zero(), 0.01);
-    if (flight) {
-      frame.vertices = {{0.0, 1.0}};
-      frame.sectors = {q};
+    FrameHull hull;
+    hull.N = Eigen::MatrixXd::Zero(2, 0);
+    if (f >= 15 && f <= 45) {
+      hull.status = HullStatus::Flight;
+      hull.vertices = {{0.0, 1.0}};
     } else {
-      frame.vertices = {{-60, 0.1}, {60, 0.1}, {60, 30}, {-60, 30}};
-      frame.centre = {0, 1};
-      frame.sectors = {q, q, q, q};
+      hull.vertices = {{-60, 0.1}, {60, 0.1}, {60, 30}, {-60, 30}};
     }
-    objective.add_frame(frame);
+    hull.lambda.assign(hull.vertices.size(), Eigen::VectorXd());
+    hull.on_box.assign(hull.vertices.size(), 0);
+    hull.centre_lambda = Eigen::VectorXd();
+    build_fan(hull);
+    c.hulls.frames.push_back(hull);
+    c.torques.push_back(t);
+    c.targets.push_back(Eigen::Vector2d::Zero());
   }
-  objective.finish();
-  return objective;
+  return c;
 }
 
 }  // namespace
@@ -46,17 +59,9 @@ TEST_CASE("bake_quadratic reproduces |τ − τ'|²") {
   }
 }
 
-TEST_CASE("closest_point on polygons, segments and points") {
-  const std::vector<Eigen::Vector2d> square{{0, 0}, {1, 0}, {1, 1}, {0, 1}};
-  CHECK(closest_point(square, {0.5, 0.5}).isApprox(Eigen::Vector2d(0.5, 0.5)));
-  CHECK(closest_point(square, {2, 0.5}).isApprox(Eigen::Vector2d(1, 0.5)));
-  CHECK(closest_point(square, {-1, -1}).isApprox(Eigen::Vector2d(0, 0)));
-  CHECK(closest_point({{0, 0}, {2, 0}}, {1, 3}).isApprox(Eigen::Vector2d(1, 0)));
-  CHECK(closest_point({{0.5, 1}}, {1, 3}).isApprox(Eigen::Vector2d(0.5, 1)));
-}
-
 TEST_CASE("the baked objective's partial derivatives match finite differences, inside and outside hulls") {
-  const BakedObjective objective = box_and_flight(10);
+  const BoxAndFlight c = box_and_flight();
+  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 10, .beta = 0.01});
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> p(0.02, 1.98), a(-4, 4), b(-0.5, 7);
   for (int i = 0; i < 200; ++i) {
@@ -77,10 +82,25 @@ TEST_CASE("the baked objective's partial derivatives match finite differences, i
   }
 }
 
+TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every sector") {
+  const BoxAndFlight c = box_and_flight();
+  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 1, .beta = 2, .torque_scale = 0.5});
+  for (int f : {3, 20}) {
+    for (const Eigen::Vector2d x : {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
+      const Eigen::VectorXd tau = c.torques[static_cast<std::size_t>(f)].at(x.y(), x.x(), c.hulls.gravity);
+      CHECK(objective.parts(f, x.x(), x.y()).torque == Approx(2 * tau.squaredNorm() / 0.25));
+    }
+  }
+  CHECK(objective.parts(3, 0, 1).inside);
+  CHECK_FALSE(objective.parts(20, 0, 1.5).inside);
+  CHECK(objective.parts(20, 0, 1.5).feasibility == Approx(0.25));
+}
+
 TEST_CASE("retiming a clip with a flight to a shorter duration keeps the flight at source speed") {
   // 2 s of source into 1.3 s: the flight second keeps its second, the other second of source
   // plays in 0.3 s.
-  const BakedObjective objective = box_and_flight(1000);
+  const BoxAndFlight c = box_and_flight();
+  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 1000, .beta = 0.01});
   const RetimeResult r = retime(objective, {.duration = 1.3, .knot_spacing = 0.05});
   INFO(r.message);
   CHECK(r.converged);
