@@ -38,12 +38,16 @@ std::vector<Eigen::VectorXd> original_torques(const Hulls& hulls, std::span<cons
   return out;
 }
 
-double torque_scale(const BodyModel& body, std::span<const Eigen::VectorXd> torques) {
+double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::VectorXd> torques) {
+  std::vector<bool> actuated(static_cast<std::size_t>(skeleton.channel_count()), true);
+  for (const motion::Joint& joint : skeleton.joints())
+    if (joint.parent < 0)
+      for (std::size_t c = 0; c < joint.channels.size(); ++c) actuated[static_cast<std::size_t>(joint.first_channel) + c] = false;
   double sum = 0;
   long count = 0;
   for (const Eigen::VectorXd& tau : torques)
-    for (Eigen::Index c = 0; c < tau.size(); ++c)
-      if (body.torque_min[c] != 0 || body.torque_max[c] != 0) sum += tau[c] * tau[c], ++count;
+    for (Eigen::Index c = 0; c < tau.size() && c < static_cast<Eigen::Index>(actuated.size()); ++c)
+      if (actuated[static_cast<std::size_t>(c)]) sum += tau[c] * tau[c], ++count;
   const double rms = count ? std::sqrt(sum / count) : 0.0;
   return rms > 0 && std::isfinite(rms) ? rms : 1.0;
 }

@@ -48,9 +48,9 @@ struct ObjectiveWeights {
 // (0, 1) with their single point's λ (the root's rows then show what no contact could supply).
 std::vector<Eigen::VectorXd> original_torques(const Hulls& hulls, std::span<const FrameTorques> torques);
 
-// RMS over frames and actuated channels (those with a non-zero limit: not the root's) of
-// `torques`; 1 when that is 0.
-double torque_scale(const BodyModel& body, std::span<const Eigen::VectorXd> torques);
+// RMS over frames and actuated channels (all but the root joints') of `torques` (channel_count
+// of `skeleton` each), N m; 1 when that is 0.
+double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::VectorXd> torques);
 
 class BakedObjective final : public PathObjective {
  public:
