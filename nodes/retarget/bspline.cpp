@@ -18,14 +18,17 @@ void check_sizes(int frames, int spacing) {
 }
 
 BasisAt basis_of(int segment, double s) {
-  const double s2 = s * s, s3 = s2 * s, t = 1 - s;
-  BasisAt b;
-  b.first = segment;
-  b.weight = {t * t * t / 6, (3 * s3 - 6 * s2 + 4) / 6, (-3 * s3 + 3 * s2 + 3 * s + 1) / 6, s3 / 6};
-  return b;
+  return {.first = segment, .weight = cubic_bspline_weights(s).value};
 }
 
 }  // namespace
+
+CubicWeights cubic_bspline_weights(double s) {
+  const double s2 = s * s, s3 = s2 * s, t = 1 - s;
+  return {.value = {t * t * t / 6, (3 * s3 - 6 * s2 + 4) / 6, (-3 * s3 + 3 * s2 + 3 * s + 1) / 6, s3 / 6},
+          .first = {-t * t / 2, (3 * s2 - 4 * s) / 2, (-3 * s2 + 2 * s + 1) / 2, s2 / 2},
+          .second = {t, 3 * s - 2, -3 * s + 1, s}};
+}
 
 int bspline_segment_count(int frames, int spacing) {
   check_sizes(frames, spacing);

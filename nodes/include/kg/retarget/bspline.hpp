@@ -33,6 +33,14 @@ struct BasisAt {
   std::array<double, 4> weight{};
 };
 
+// The four weights of a uniform cubic B-spline segment at s in [0, 1] (those above) and their
+// first and second derivatives with respect to s (divide by the knot spacing, and its square,
+// for derivatives with respect to time).
+struct CubicWeights {
+  std::array<double, 4> value{}, first{}, second{};
+};
+CubicWeights cubic_bspline_weights(double s);
+
 // Segments and controls of a spline of `spacing` frames over `frames` frames (both >= 1;
 // std::invalid_argument otherwise).
 int bspline_segment_count(int frames, int spacing);

@@ -1,0 +1,91 @@
+// The retiming objective of McCann et al. 2006 (§3.5 eq. 14, §3.6), baked: per source frame, the
+// integrand
+//   α |(p̈, ṗ²) − c|²  +  β |τ(p̈, ṗ²) − τ'|² / τ_scale²
+// where c is the closest point of the frame's hull (hulls.hpp: feasibility) and τ the generalised
+// forces of the force model (force_model.hpp), affine in (p̈, ṗ²) on each sector of the hull's fan,
+// so the torque term is, per sector, a quadratic with six coefficients (those of ṗ⁴, p̈², ṗ²p̈, ṗ²,
+// p̈ and 1): evaluating it no longer depends on the number of channels. τ_scale (N m) makes the
+// torque term dimensionless (torque_scale below), so α and β weigh comparable quantities whatever
+// the body. Between frames the two frames' integrands are interpolated linearly in source time.
+//
+//   BakedObjective objective(hulls, torques, targets, {.alpha = 1000, .beta = 1, .torque_scale = s});
+//   int hint = 0;
+//   SampleCost c = objective.evaluate(1.25, 0.0, 1.0, hint);   // at source 1.25 s, original timing
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/retime/hulls.hpp"
+#include "kg/retime/path_torques.hpp"
+#include "kg/retime/retimer.hpp"
+
+namespace kg::retime {
+
+// The six coefficients of a quadratic in (a, b) = (p̈, ṗ²):
+//   q[0] b² + q[1] a² + q[2] a b + q[3] b + q[4] a + q[5].
+using Quadratic = std::array<double, 6>;
+
+inline double evaluate(const Quadratic& q, double a, double b) {
+  return q[0] * b * b + q[1] * a * a + q[2] * a * b + q[3] * b + q[4] * a + q[5];
+}
+
+// |t0 + ta a + tb b − target|² · weight as a Quadratic (all vectors of one size).
+Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, const Eigen::VectorXd& tb,
+                         const Eigen::VectorXd& target, double weight);
+
+struct ObjectiveWeights {
+  double alpha = 1000;       // feasibility: per (plane unit)² of distance to the hull
+  double beta = 1;           // torque: per (τ_scale)² of torque error
+  double torque_scale = 1;   // N m (> 0)
+};
+
+// The generalised forces of the original timing (0, 1) with the centre's contact forces, per frame
+// (channel_count each): τ' for "keep the look". Flight and infeasible frames give the forces at
+// (0, 1) with their single point's λ (the root's rows then show what no contact could supply).
+std::vector<Eigen::VectorXd> original_torques(const Hulls& hulls, std::span<const FrameTorques> torques);
+
+// RMS over frames and actuated channels (all but the root joints') of `torques` (channel_count
+// of `skeleton` each), N m; 1 when that is 0.
+double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::VectorXd> torques);
+
+class BakedObjective final : public PathObjective {
+ public:
+  // Bakes every frame's sectors (the Bake step). `hulls` is not owned and must outlive the
+  // objective; torques and targets have one entry per frame (channel_count each). Throws
+  // std::invalid_argument for sizes that disagree, fewer than 2 frames or weights out of range.
+  BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques, std::span<const Eigen::VectorXd> targets,
+                 double source_fps, const ObjectiveWeights& weights);
+
+  SampleCost evaluate(double p, double pddot, double pdot_squared, int& hint) const override;
+  double source_duration() const override { return (static_cast<double>(quadratics_.size()) - 1) / fps_; }
+  double source_fps() const override { return fps_; }
+
+  // The two parts of one frame's integrand at (p̈, ṗ²), and whether the point lies in its hull
+  // (within `tolerance` plane units).
+  struct Parts {
+    double feasibility = 0;  // α |q − c|²
+    double torque = 0;       // β |τ − τ'|² / τ_scale²
+    bool inside = false;
+  };
+  Parts parts(int frame, double pddot, double pdot_squared, double tolerance = 1e-9) const;
+  const Quadratic& quadratic(int frame, int sector) const {
+    return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
+  }
+
+ private:
+  struct FrameCost {
+    double value, d_a, d_b;
+  };
+  FrameCost frame_cost(int frame, double a, double b, int& hint) const;
+
+  const Hulls& hulls_;
+  double fps_;
+  ObjectiveWeights weights_;
+  std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
+};
+
+}  // namespace kg::retime

@@ -1,0 +1,80 @@
+// Retiming a clip from its hulls, end to end (McCann et al. 2006 §3.5-§4): the target torques τ'
+// (keep the look, least effort, or another clip's), the baked objective, the solve (retimer.hpp)
+// or the time-optimal playback (time_optimal.hpp), and what came of it: the objective's parts, the
+// share of output frames whose timing lies inside their hulls, and, when the requested duration
+// leaves frames outside, the shortest feasible duration, so an impossible request is reported
+// rather than hidden.
+//
+//   ClipRetime r = retime_clip(hulls, torques.frames, fps, {.solve = {.duration = 1.2}});
+//   std::cout << r.message;   // converged? inside? shortest feasible duration?
+#pragma once
+
+#include <optional>
+#include <ostream>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/retime/hulls.hpp"
+#include "kg/retime/objective.hpp"
+#include "kg/retime/path_torques.hpp"
+#include "kg/retime/retimer.hpp"
+#include "kg/retime/time_optimal.hpp"
+
+namespace kg::retime {
+
+enum class TorqueTarget {
+  Original,   // τ' = the clip's own torques at its original timing: keep the look
+  Zero,       // τ' = 0: least effort
+  Reference,  // τ' = another clip's torques at its original timing (same skeleton), by normalised time
+};
+const char* to_string(TorqueTarget target);  // "match", "minimal", "reference"
+
+enum class RetimeMode {
+  Optimise,     // minimise eq. 14 for the requested duration and pins
+  TimeOptimal,  // the shortest duration within the hulls (duration and pins ignored)
+};
+
+struct ClipRetimeOptions {
+  RetimeOptions solve{};            // duration (output s), pins, knot spacing, grid, iterations
+  RetimeMode mode = RetimeMode::Optimise;
+  TorqueTarget target = TorqueTarget::Original;
+  double alpha = 1000;              // feasibility weight (ObjectiveWeights)
+  double beta = 1;                  // torque weight
+  double inside_tolerance = 0.01;   // plane units: a timing this close to its hull counts as inside
+  TimeOptimalOptions time_optimal{};
+};
+
+struct ClipRetime {
+  TimeWarp warp;
+  RetimeResult solve;                    // Optimise mode
+  std::optional<TimeOptimalResult> shortest;  // TimeOptimal mode, or computed when frames are outside
+  double feasibility = 0;                // ∫ α |q − c|² dt at the result
+  double torque = 0;                     // ∫ β |τ − τ'|² / τ_scale² dt
+  double torque_scale = 1;               // N m
+  // Output frames (at the source's rate over the output duration) whose (p̈, ṗ²) lies within
+  // inside_tolerance of the hull of the source frame they play, over all output frames; and of
+  // those playing frames with an empty polytope (flight, infeasible), the share within the same
+  // tolerance of their point.
+  double share_inside = 0;
+  double share_at_point = 1;
+  int output_frames = 0;
+  bool feasible = true;                  // every output frame inside (or at its point)
+  std::string message;                   // one paragraph for logs
+};
+
+// Throws std::invalid_argument for inputs that disagree (sizes, a Reference target without
+// `reference` torques) and what retime() throws (contradictory pins, ...).
+ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques, double fps,
+                       const ClipRetimeOptions& options, const motion::Skeleton& skeleton,
+                       std::span<const Eigen::VectorXd> reference = {});
+
+// Per source frame, as JSON: status, hull vertices and centre, the timing (p̈, ṗ²) the warp plays
+// it at, whether that lies inside, the contact forces per patch there (force N, centre of pressure
+// m) and the generalised forces τ (N, N m). `patch_names` name the patches (Hulls::patch_names).
+void write_forces_json(std::ostream& os, const Hulls& hulls, std::span<const FrameTorques> torques,
+                       const TimeWarp& warp, double fps);
+
+}  // namespace kg::retime

@@ -1,0 +1,83 @@
+// The retiming p(t) of McCann et al. 2006 (fig. 2): output time t in [0, duration] to source time
+// p in [0, source_duration], a uniform cubic B-spline, strictly increasing so playback never
+// stops or runs backwards. The output frame at time t is the source pose at time p(t).
+//
+// Layout: S uniform segments of knot spacing h = duration / S; S + 3 controls, control j sitting
+// at output time (j - 1) h (one before 0 and one after the end, unclamped so the ends are as
+// smooth as the middle). p is strictly increasing when its controls are (ṗ is a positive
+// combination of their differences).
+//
+// Constraints (all linear in the controls): p(0) = 0 and p(duration) = source_duration (the ends
+// kept), and any number of pins p(t_i) = s_i (a source moment played at a given output time).
+//
+//   TimeWarp warp = TimeWarp::uniform(/*source*/ 4.0, /*duration*/ 2.0, /*segments*/ 20);
+//   WarpSample s = warp.sample(0.5);           // p, ṗ, p̈ at t = 0.5 s (source seconds, per second, per s²)
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/graph/value.hpp"
+
+namespace kg::retime {
+
+// p and its derivatives at one output time, and the controls that shape them there.
+struct WarpSample {
+  double p = 0;       // source seconds
+  double pdot = 0;    // source seconds per output second
+  double pddot = 0;   // per output second²
+  int first = 0;      // controls first .. first + 3 carry the weights below
+  std::array<double, 4> weight{}, weight_first{}, weight_second{};  // ∂p/∂c, ∂ṗ/∂c, ∂p̈/∂c
+};
+
+// A source moment played at a given output time.
+struct Pin {
+  double source_time = 0;  // seconds of the source clip
+  double output_time = 0;  // seconds of the output
+};
+
+struct TimeWarp {
+  double duration = 0;         // output seconds, > 0
+  double source_duration = 0;  // source seconds, > 0
+  std::vector<double> controls{};  // source seconds; segments() + 3 of them
+
+  int segments() const { return static_cast<int>(controls.size()) - 3; }
+  double knot_spacing() const { return duration / segments(); }
+  // t is clamped to [0, duration].
+  WarpSample sample(double t) const;
+  double at(double t) const { return sample(t).p; }
+  // Whether every control exceeds the one before by more than `margin` source seconds.
+  bool strictly_increasing(double margin = 0) const;
+
+  // Playback at constant speed source_duration / duration, with `segments` segments (>= 1).
+  static TimeWarp uniform(double source_duration, double duration, int segments);
+};
+
+// The linear constraints on a warp's controls: rows A c = b for the kept ends and the pins.
+struct WarpConstraints {
+  Eigen::MatrixXd A;  // (2 + pins) x controls
+  Eigen::VectorXd b;  // source seconds
+};
+
+// Throws std::invalid_argument naming the pin when a pin lies outside [0, duration] x [0,
+// source_duration], two pins share an output time, or pins run backwards (a later output time
+// playing an earlier source moment: no increasing p(t) can meet them).
+WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
+
+// A strictly increasing warp meeting the constraints: piecewise-constant speed between the ends
+// and pins, fitted by a spline and corrected onto the constraints. Throws std::invalid_argument
+// (naming the closest pair of pins) when `segments` is too coarse to pass the pins increasingly.
+TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
+
+// The warp of `segments` segments over [0, duration] closest in least squares to the playback
+// samples (output_times[i], source_times[i]) with the ends kept exactly (the first and last
+// sample's source times at 0 and duration). Sizes must agree (>= 2 samples); throws
+// std::invalid_argument otherwise. The result need not increase strictly if the samples do not.
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments);
+
+}  // namespace kg::retime
+
+KG_DECLARE_TYPE(kg::retime::TimeWarp, "kg.TimeWarp")

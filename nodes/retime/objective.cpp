@@ -1,0 +1,134 @@
+#include "kg/retime/objective.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+#include "kg/retime/force_model.hpp"
+
+namespace kg::retime {
+
+namespace {
+
+double cross(const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); }
+
+}  // namespace
+
+Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, const Eigen::VectorXd& tb,
+                         const Eigen::VectorXd& target, double weight) {
+  const Eigen::VectorXd r = t0 - target;
+  return {weight * tb.squaredNorm(), weight * ta.squaredNorm(), 2 * weight * ta.dot(tb),
+          2 * weight * tb.dot(r),    2 * weight * ta.dot(r),    weight * r.squaredNorm()};
+}
+
+std::vector<Eigen::VectorXd> original_torques(const Hulls& hulls, std::span<const FrameTorques> torques) {
+  if (torques.size() != hulls.frames.size())
+    throw std::invalid_argument("original torques: " + std::to_string(torques.size()) + " frames of torques for " +
+                                std::to_string(hulls.frames.size()) + " hulls");
+  std::vector<Eigen::VectorXd> out;
+  out.reserve(torques.size());
+  SectorTorques t;
+  for (std::size_t f = 0; f < torques.size(); ++f) {
+    const FrameHull& hull = hulls.frames[f];
+    const Eigen::Vector2d original(0, 1);
+    const int sector = find_sector(hull, original, 0);
+    sector_torques(hull, sector, torques[f], hulls.gravity, t);
+    out.push_back(t.t0 + t.pdot2);
+  }
+  return out;
+}
+
+double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::VectorXd> torques) {
+  std::vector<bool> actuated(static_cast<std::size_t>(skeleton.channel_count()), true);
+  for (const motion::Joint& joint : skeleton.joints())
+    if (joint.parent < 0)
+      for (std::size_t c = 0; c < joint.channels.size(); ++c) actuated[static_cast<std::size_t>(joint.first_channel) + c] = false;
+  double sum = 0;
+  long count = 0;
+  for (const Eigen::VectorXd& tau : torques)
+    for (Eigen::Index c = 0; c < tau.size() && c < static_cast<Eigen::Index>(actuated.size()); ++c)
+      if (actuated[static_cast<std::size_t>(c)]) sum += tau[c] * tau[c], ++count;
+  const double rms = count ? std::sqrt(sum / count) : 0.0;
+  return rms > 0 && std::isfinite(rms) ? rms : 1.0;
+}
+
+BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques,
+                               std::span<const Eigen::VectorXd> targets, double source_fps,
+                               const ObjectiveWeights& weights)
+    : hulls_(hulls), fps_(source_fps), weights_(weights) {
+  const std::size_t frames = hulls.frames.size();
+  if (frames < 2) throw std::invalid_argument("retiming objective: fewer than 2 frames");
+  if (torques.size() != frames || targets.size() != frames)
+    throw std::invalid_argument("retiming objective: " + std::to_string(frames) + " hulls, " +
+                                std::to_string(torques.size()) + " frames of torques and " +
+                                std::to_string(targets.size()) + " target torques (expected equal)");
+  if (!(source_fps > 0)) throw std::invalid_argument("retiming objective: fps must be > 0");
+  if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.torque_scale > 0))
+    throw std::invalid_argument("retiming objective: alpha and beta must be >= 0 and the torque scale > 0");
+  const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
+  quadratics_.resize(frames);
+  SectorTorques t;
+  for (std::size_t f = 0; f < frames; ++f) {
+    const FrameHull& hull = hulls.frames[f];
+    quadratics_[f].reserve(hull.sectors.size());
+    for (std::size_t s = 0; s < hull.sectors.size(); ++s) {
+      sector_torques(hull, static_cast<int>(s), torques[f], hulls.gravity, t);
+      quadratics_[f].push_back(bake_quadratic(t.t0, t.pddot, t.pdot2, targets[f], w));
+    }
+  }
+}
+
+BakedObjective::FrameCost BakedObjective::frame_cost(int frame, double a, double b, int& hint) const {
+  const FrameHull& hull = hulls_.frames[static_cast<std::size_t>(frame)];
+  const Eigen::Vector2d x(a, b);
+  hint = find_sector(hull, x, hint);
+  const Quadratic& q = quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(hint)];
+  FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4], 2 * q[0] * b + q[2] * a + q[3]};
+  // Inside the sector's fan triangle is inside the hull: no nearest point to find.
+  const FanSector& s = hull.sectors[static_cast<std::size_t>(hint)];
+  const int n = static_cast<int>(hull.vertices.size());
+  if (s.in_hull && n >= 3) {
+    const Eigen::Vector2d& u = hull.vertices[static_cast<std::size_t>(s.edge)];
+    const Eigen::Vector2d& v = hull.vertices[static_cast<std::size_t>((s.edge + 1) % n)];
+    if (cross(v - u, x - u) >= 0) return cost;
+  }
+  int probe = hint;
+  const HullPoint c = closest_point(hull, x, probe);
+  if (c.inside) return cost;
+  const Eigen::Vector2d gap = x - c.point;
+  cost.value += weights_.alpha * gap.squaredNorm();
+  cost.d_a += 2 * weights_.alpha * gap.x();
+  cost.d_b += 2 * weights_.alpha * gap.y();
+  return cost;
+}
+
+SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared, int& hint) const {
+  const int last = static_cast<int>(quadratics_.size()) - 1;
+  const double x = std::clamp(p * fps_, 0.0, static_cast<double>(last));
+  const int f = std::min(static_cast<int>(x), last - 1);
+  const double u = x - f;
+  int sector = hint;
+  const FrameCost c0 = frame_cost(f, pddot, pdot_squared, sector);
+  hint = sector;
+  const FrameCost c1 = frame_cost(f + 1, pddot, pdot_squared, sector);
+  return {.value = (1 - u) * c0.value + u * c1.value,
+          .d_p = (c1.value - c0.value) * fps_,
+          .d_pddot = (1 - u) * c0.d_a + u * c1.d_a,
+          .d_pdot2 = (1 - u) * c0.d_b + u * c1.d_b};
+}
+
+BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot_squared, double tolerance) const {
+  const FrameHull& hull = hulls_.frames.at(static_cast<std::size_t>(frame));
+  const Eigen::Vector2d x(pddot, pdot_squared);
+  int hint = 0;
+  const int sector = find_sector(hull, x, hint);
+  Parts out;
+  out.torque = kg::retime::evaluate(quadratic(frame, sector), pddot, pdot_squared);
+  hint = sector;
+  const HullPoint c = closest_point(hull, x, hint);
+  out.feasibility = weights_.alpha * c.distance_squared;
+  out.inside = c.distance_squared <= tolerance * tolerance;
+  return out;
+}
+
+}  // namespace kg::retime

@@ -1,0 +1,71 @@
+#include "kg/retime/playback.hpp"
+
+#include <cmath>
+#include <iomanip>
+#include <stdexcept>
+#include <string>
+
+#include "kg/graph/json.hpp"
+#include "kg/motion/resample.hpp"
+
+namespace kg::retime {
+
+namespace {
+
+int output_frames(const TimeWarp& warp, double fps) {
+  if (!(fps > 0) || !std::isfinite(fps))
+    throw std::invalid_argument("retimed playback: fps " + std::to_string(fps) + " (expected > 0)");
+  return static_cast<int>(std::floor(warp.duration * fps + 1e-9)) + 1;
+}
+
+}  // namespace
+
+motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps) {
+  source.check();
+  const int frames = output_frames(warp, fps);
+  if (std::abs(warp.source_duration - source.duration()) > 0.5 / source.fps)
+    throw std::invalid_argument("retimed playback: the warp plays " + std::to_string(warp.source_duration) +
+                                " s of source but the clip '" + source.name + "' lasts " +
+                                std::to_string(source.duration()) + " s");
+  motion::Motion out{source.skeleton, motion::FrameMatrix(frames, source.values.cols()), fps, source.name};
+  for (int k = 0; k < frames; ++k) {
+    const double p = std::min(warp.at(k / fps), source.duration());
+    if (k == 0)
+      motion::pose_at(source, p, out.values.row(k));
+    else
+      motion::pose_at(source, p, out.values.row(k - 1), out.values.row(k));
+  }
+  return out;
+}
+
+void write_warp_csv(std::ostream& os, const TimeWarp& warp, double fps) {
+  const int frames = output_frames(warp, fps);
+  os << "t,p,pdot,pddot\n" << std::setprecision(10);
+  for (int k = 0; k < frames; ++k) {
+    const WarpSample s = warp.sample(k / fps);
+    os << k / fps << ',' << s.p << ',' << s.pdot << ',' << s.pddot << '\n';
+  }
+}
+
+void write_warp_json(std::ostream& os, const TimeWarp& warp, double fps) {
+  const int frames = output_frames(warp, fps);
+  std::vector<double> t, p, pdot, pddot;
+  for (int k = 0; k < frames; ++k) {
+    const WarpSample s = warp.sample(k / fps);
+    t.push_back(k / fps), p.push_back(s.p), pdot.push_back(s.pdot), pddot.push_back(s.pddot);
+  }
+  graph::JsonWriter w(os, 0);
+  w.begin_object();
+  w.field("duration", warp.duration);
+  w.field("source_duration", warp.source_duration);
+  w.field("fps", fps);
+  w.field("controls", warp.controls);
+  w.field("t", t);
+  w.field("p", p);
+  w.field("pdot", pdot);
+  w.field("pddot", pddot);
+  w.end_object();
+  os << '\n';
+}
+
+}  // namespace kg::retime

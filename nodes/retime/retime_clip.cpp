@@ -1,0 +1,209 @@
+#include "kg/retime/retime_clip.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "kg/graph/json.hpp"
+#include "kg/retime/force_model.hpp"
+
+namespace kg::retime {
+
+const char* to_string(TorqueTarget target) {
+  switch (target) {
+    case TorqueTarget::Original:
+      return "match";
+    case TorqueTarget::Zero:
+      return "minimal";
+    case TorqueTarget::Reference:
+      return "reference";
+  }
+  return "?";
+}
+
+namespace {
+
+std::string fixed(double x, int digits = 3) {
+  std::ostringstream out;
+  out.setf(std::ios::fixed);
+  out.precision(digits);
+  out << x;
+  return out.str();
+}
+
+// The output time at which `warp` plays source time `p` (bisection: p(t) increases strictly).
+double output_time_of(const TimeWarp& warp, double p) {
+  double lo = 0, hi = warp.duration;
+  for (int i = 0; i < 60; ++i) {
+    const double mid = 0.5 * (lo + hi);
+    (warp.at(mid) < p ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+int nearest_frame(double p, double fps, int frames) {
+  return std::clamp(static_cast<int>(std::lround(p * fps)), 0, frames - 1);
+}
+
+}  // namespace
+
+ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques, double fps,
+                       const ClipRetimeOptions& options, const motion::Skeleton& skeleton,
+                       std::span<const Eigen::VectorXd> reference) {
+  const int frames = static_cast<int>(hulls.frames.size());
+  if (static_cast<int>(torques.size()) != frames)
+    throw std::invalid_argument("retime: " + std::to_string(torques.size()) + " frames of torques for " +
+                                std::to_string(frames) + " hulls");
+  if (frames < 2) throw std::invalid_argument("retime: the clip has fewer than 2 frames");
+  const std::vector<Eigen::VectorXd> original = original_torques(hulls, torques);
+  std::vector<Eigen::VectorXd> targets;
+  switch (options.target) {
+    case TorqueTarget::Original:
+      targets = original;
+      break;
+    case TorqueTarget::Zero:
+      for (const Eigen::VectorXd& t : original) targets.push_back(Eigen::VectorXd::Zero(t.size()));
+      break;
+    case TorqueTarget::Reference: {
+      if (reference.empty()) throw std::invalid_argument("retime: objective 'reference' needs the reference clip's torques");
+      for (int f = 0; f < frames; ++f) {
+        const std::size_t r = static_cast<std::size_t>(
+            std::lround(static_cast<double>(f) / (frames - 1) * (static_cast<double>(reference.size()) - 1)));
+        if (reference[r].size() != original[static_cast<std::size_t>(f)].size())
+          throw std::invalid_argument("retime: the reference clip has another skeleton (" +
+                                      std::to_string(reference[r].size()) + " channels, expected " +
+                                      std::to_string(original[static_cast<std::size_t>(f)].size()) + ")");
+        targets.push_back(reference[r]);
+      }
+      break;
+    }
+  }
+  ClipRetime out;
+  out.torque_scale = torque_scale(skeleton, original);
+  const BakedObjective objective(hulls, torques, targets, fps,
+                                 {.alpha = options.alpha, .beta = options.beta, .torque_scale = out.torque_scale});
+
+  std::vector<Polygon> polygons;
+  auto time_optimal_playback = [&] {
+    if (polygons.empty())
+      for (const FrameHull& h : hulls.frames) polygons.push_back(h.vertices);
+    return time_optimal(polygons, fps, options.time_optimal);
+  };
+  std::ostringstream message;
+  if (options.mode == RetimeMode::TimeOptimal) {
+    out.shortest = time_optimal_playback();
+    if (!out.shortest->feasible) {
+      out.feasible = false;
+      out.message = "time-optimal retiming: " + out.shortest->message;
+      return out;
+    }
+    out.warp = out.shortest->warp;
+    message << "time-optimal playback: " << out.shortest->message << ". ";
+  } else {
+    out.solve = retime(objective, options.solve);
+    out.warp = out.solve.warp;
+    message << (out.solve.converged ? "converged" : "did not converge") << " in " << out.solve.iterations
+            << " iterations, " << fixed(out.solve.seconds * 1000, 1) << " ms (" << out.solve.message << "). ";
+  }
+
+  // Parts of the objective and the share of output frames inside their hulls.
+  const int samples = grid_samples(out.warp, fps, options.solve.samples_per_frame);
+  const double dt = out.warp.duration / (samples - 1);
+  for (int k = 0; k < samples; ++k) {
+    const WarpSample s = out.warp.sample(k * dt);
+    const double w = (k == 0 || k == samples - 1) ? dt / 2 : dt;
+    const BakedObjective::Parts parts =
+        objective.parts(nearest_frame(s.p, fps, frames), s.pddot, s.pdot * s.pdot);
+    out.feasibility += w * parts.feasibility;
+    out.torque += w * parts.torque;
+  }
+  out.output_frames = static_cast<int>(std::floor(out.warp.duration * fps + 1e-9)) + 1;
+  int feasible_frames = 0, inside = 0, point_frames = 0, at_point = 0;
+  for (int k = 0; k < out.output_frames; ++k) {
+    const WarpSample s = out.warp.sample(k / fps);
+    const int f = nearest_frame(s.p, fps, frames);
+    const FrameHull& hull = hulls.frames[static_cast<std::size_t>(f)];
+    int hint = 0;
+    const HullPoint c = closest_point(hull, Eigen::Vector2d(s.pddot, s.pdot * s.pdot), hint);
+    const bool near = c.distance_squared <= options.inside_tolerance * options.inside_tolerance;
+    if (hull.status == HullStatus::Feasible)
+      ++feasible_frames, inside += near;
+    else
+      ++point_frames, at_point += near;
+  }
+  out.share_inside = feasible_frames ? static_cast<double>(inside) / feasible_frames : 1.0;
+  out.share_at_point = point_frames ? static_cast<double>(at_point) / point_frames : 1.0;
+  out.feasible = inside == feasible_frames;
+  message << fixed(100 * out.share_inside, 1) << "% of " << feasible_frames
+          << " output frames inside their hulls";
+  if (point_frames)
+    message << ", " << fixed(100 * out.share_at_point, 1) << "% of " << point_frames
+            << " frames without a feasible polytope (flight or not exactly physical) at their closest point";
+  message << ".";
+  if (!out.feasible && options.mode == RetimeMode::Optimise) {
+    out.shortest = time_optimal_playback();
+    if (out.shortest->feasible && options.solve.duration < out.shortest->duration)
+      message << " The requested duration " << fixed(options.solve.duration) << " s is shorter than any feasible "
+              << "playback: the shortest lasts " << fixed(out.shortest->duration) << " s.";
+    else if (!out.shortest->feasible)
+      message << " No timing keeps every frame inside its hull: " << out.shortest->message << ".";
+  }
+  out.message = message.str();
+  return out;
+}
+
+void write_forces_json(std::ostream& os, const Hulls& hulls, std::span<const FrameTorques> torques,
+                       const TimeWarp& warp, double fps) {
+  graph::JsonWriter w(os, 0);
+  w.begin_object();
+  w.field("fps", fps);
+  w.key("patches");
+  w.begin_array();
+  for (const std::string& name : hulls.patch_names) w.value(name);
+  w.end_array();
+  w.key("frames");
+  w.begin_array();
+  Eigen::VectorXd lambda;
+  int hint = 0;
+  for (std::size_t f = 0; f < hulls.frames.size(); ++f) {
+    const FrameHull& hull = hulls.frames[f];
+    const double t = output_time_of(warp, static_cast<double>(f) / fps);
+    const WarpSample s = warp.sample(t);
+    const Eigen::Vector2d x(s.pddot, s.pdot * s.pdot);
+    lambda_at(hull, x, hint, lambda);
+    int probe = hint;
+    const HullPoint c = closest_point(hull, x, probe);
+    w.begin_object();
+    w.field("frame", static_cast<int>(f));
+    w.field("status", to_string(hull.status));
+    if (!hull.message.empty()) w.field("message", hull.message);
+    std::vector<double> flat;
+    for (const Eigen::Vector2d& v : hull.vertices) flat.push_back(v.x()), flat.push_back(v.y());
+    w.field("hull", flat);
+    w.field("centre", std::vector<double>{hull.centre.x(), hull.centre.y()});
+    w.field("output_time", t);
+    w.field("timing", std::vector<double>{x.x(), x.y()});
+    w.field("distance", std::sqrt(c.distance_squared));
+    w.key("contacts");
+    w.begin_array();
+    for (const PatchForce& p : patch_forces(hull, lambda)) {
+      w.begin_object();
+      w.field("patch", hulls.patch_names.at(static_cast<std::size_t>(p.patch)));
+      w.field("force", std::vector<double>{p.force.x(), p.force.y(), p.force.z()});
+      w.field("centre_of_pressure",
+              std::vector<double>{p.centre_of_pressure.x(), p.centre_of_pressure.y(), p.centre_of_pressure.z()});
+      w.end_object();
+    }
+    w.end_array();
+    Eigen::VectorXd tau = torques[f].at(x.y(), x.x(), hulls.gravity);
+    if (hull.N.cols() > 0) tau.noalias() -= hull.N * lambda;
+    w.field("torques", std::vector<double>(tau.data(), tau.data() + tau.size()));
+    w.end_object();
+  }
+  w.end_array();
+  w.end_object();
+  os << '\n';
+}
+
+}  // namespace kg::retime

@@ -1,0 +1,354 @@
+// retime.hulls and retime.retime: thin adapters over hulls.hpp, retime_clip.hpp and playback.hpp.
+// A solve that misses its hulls is reported (figures, log), and fails the node only with `strict`.
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "kg/builtin_nodes.hpp"
+#include "kg/graph/atomic_file.hpp"
+#include "kg/graph/json.hpp"
+#include "kg/retime/contacts.hpp"
+#include "kg/retime/hulls.hpp"
+#include "kg/retime/playback.hpp"
+#include "kg/retime/retime_clip.hpp"
+
+namespace kg::retime {
+namespace {
+
+using graph::NodeSpec;
+using graph::NodeType;
+using graph::Params;
+using graph::ParamSpec;
+using graph::ParamType;
+using graph::RunContext;
+
+// "9.81" (straight down) or three numbers (a world vector), m/s²; empty: `fallback`.
+Eigen::Vector3d gravity_from(const std::vector<double>& values, const Eigen::Vector3d& fallback) {
+  if (values.empty()) return fallback;
+  if (values.size() == 1) return Eigen::Vector3d(0, -values[0], 0);
+  if (values.size() == 3) return Eigen::Vector3d(values[0], values[1], values[2]);
+  throw std::invalid_argument("gravity: " + std::to_string(values.size()) +
+                              " numbers (expected one magnitude, down, or a vector of three, m/s^2)");
+}
+
+class HullsNode final : public graph::Node {
+ public:
+  explicit HullsNode(const Params& p)
+      : gravity_(p.get<std::vector<double>>("gravity")), mass_scale_(p.get<double>("mass_scale")) {
+    options_.tolerance = p.get<double>("tolerance");
+    options_.pddot_max = p.get<double>("pddot_max");
+    options_.pdot2_max = p.get<double>("pdot2_max");
+    gravity_from(gravity_, Eigen::Vector3d::Zero());  // refuse a bad list when the graph loads
+  }
+
+  void run(RunContext& ctx) const override {
+    BodyModel body = ctx.input<BodyModel>("body");
+    const Contacts& contacts = ctx.input<Contacts>("contacts");
+    const PathTorques& source = ctx.input<PathTorques>("torques");
+    if (contacts.frame_count() != source.frame_count())
+      throw std::invalid_argument("the contacts have " + std::to_string(contacts.frame_count()) +
+                                  " frames and the torques " + std::to_string(source.frame_count()));
+    body.gravity = gravity_from(gravity_, body.gravity);
+    // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
+    PathTorques edited{source.skeleton, source.fps, {}, "", {}};
+    edited.frames.reserve(source.frames.size());
+    for (int f = 0; f < source.frame_count(); ++f) edited.frames.push_back(source.edited(f, mass_scale_));
+    if (mass_scale_ != 1) ctx.log("segment " + source.segment + " weighs " + std::to_string(mass_scale_) + " times its mass");
+
+    const auto start = std::chrono::steady_clock::now();
+    Hulls hulls = build_hulls(body, contacts, edited.frames, options_);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    long lps = 0;
+    for (const FrameHull& h : hulls.frames) lps += h.lp_count;
+    const int frames = static_cast<int>(hulls.frames.size());
+    ctx.report("frames", static_cast<std::int64_t>(frames));
+    ctx.report("feasible", static_cast<std::int64_t>(hulls.count(HullStatus::Feasible)));
+    ctx.report("flight", static_cast<std::int64_t>(hulls.count(HullStatus::Flight)));
+    ctx.report("infeasible", static_cast<std::int64_t>(hulls.count(HullStatus::Infeasible)));
+    ctx.report("lps_per_frame", frames ? static_cast<double>(lps) / frames : 0.0);
+    ctx.report("ms_per_frame", frames ? 1000 * seconds / frames : 0.0);
+    std::ostringstream log;
+    log << frames << " hulls: " << hulls.count(HullStatus::Feasible) << " feasible, "
+        << hulls.count(HullStatus::Flight) << " in flight, " << hulls.count(HullStatus::Infeasible)
+        << " not exactly physical (closest point); gravity (" << body.gravity.transpose() << ") m/s^2";
+    ctx.log(log.str());
+    ctx.output("hulls", std::move(hulls));
+    ctx.output("torques", std::move(edited));
+  }
+
+ private:
+  std::vector<double> gravity_;
+  double mass_scale_;
+  HullOptions options_;
+};
+
+NodeType hulls_node_type() {
+  NodeSpec spec{
+      .type = "retime.hulls",
+      .version = 1,
+      .doc = "Per frame, the timings (p̈, ṗ²) the body can follow the path at (McCann et al. 2006 §3.3, eq. 13): "
+             "the projection of the polytope of contact forces within friction cones and torques within limits, "
+             "found with GLPK by LPs in swept directions refined to `tolerance`, with λ at each vertex and the "
+             "centre at the original timing (0, 1) of least contact force; the force model's fan (§3.4). Frames "
+             "in flight and frames no contact forces can explain get their least-squares point, reported. The "
+             "physical edits of §4.2 (`gravity`, a segment's `mass_scale`) change the coefficients, not the "
+             "inverse dynamics.",
+      .inputs = {{"body", "kg.BodyModel", true, "masses, torque limits, friction and gravity"},
+                 {"contacts", "kg.Contacts", true, "which contact vertices touch at each frame"},
+                 {"torques", "kg.PathTorques", true, "the torque coefficients per frame (retime.dynamics)"}},
+      .outputs = {{"hulls", "kg.Hulls", true, "per frame: status, hull, λ at its vertices, centre, fan"},
+                  {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (edits applied)"}},
+      .params = {{.name = "gravity",
+                  .type = ParamType::FloatList,
+                  .default_value = std::vector<double>{},
+                  .doc = "m/s^2: one number (straight down) or a world vector x y z (+Y up); empty: the body's"},
+                 {.name = "mass_scale",
+                  .type = ParamType::Float,
+                  .default_value = 1.0,
+                  .doc = "the modelled segment's mass (and inertia) times this (retime.dynamics' `segment`)",
+                  .min = 1e-6,
+                  .max = 1e6},
+                 {.name = "tolerance",
+                  .type = ParamType::Float,
+                  .default_value = 1e-3,
+                  .doc = "how far the true hull may reach beyond an edge found (plane units of p̈ and ṗ²)",
+                  .min = 1e-9,
+                  .max = 1.0},
+                 {.name = "pddot_max",
+                  .type = ParamType::Float,
+                  .default_value = 20.0,
+                  .doc = "the plane's box: |p̈| at most this (1/s)",
+                  .min = 1e-3,
+                  .max = 1e6},
+                 {.name = "pdot2_max",
+                  .type = ParamType::Float,
+                  .default_value = 16.0,
+                  .doc = "the plane's box: ṗ² at most this (16: four times the original speed)",
+                  .min = 1e-3,
+                  .max = 1e6}}};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<HullsNode>(p); }};
+}
+
+class RetimeNode final : public graph::Node {
+ public:
+  explicit RetimeNode(const Params& p)
+      : duration_scale_(p.get<double>("duration_scale")),
+        duration_(p.get<double>("duration")),
+        fps_(p.get<double>("fps")),
+        curves_(p.get<std::string>("curves")),
+        forces_(p.get<std::string>("forces")),
+        report_(p.get<std::string>("report")),
+        strict_(p.get<bool>("strict")) {
+    const std::vector<double> sources = p.get<std::vector<double>>("pin_source");
+    const std::vector<double> outputs = p.get<std::vector<double>>("pin_output");
+    if (sources.size() != outputs.size())
+      throw std::invalid_argument("pin_source has " + std::to_string(sources.size()) + " times and pin_output " +
+                                  std::to_string(outputs.size()) + " (expected one output time per source time)");
+    for (std::size_t i = 0; i < sources.size(); ++i) options_.solve.pins.push_back({sources[i], outputs[i]});
+    const std::string objective = p.get<std::string>("objective");
+    options_.target = objective == "minimal"     ? TorqueTarget::Zero
+                      : objective == "reference" ? TorqueTarget::Reference
+                                                 : TorqueTarget::Original;
+    options_.mode = p.get<std::string>("mode") == "time_optimal" ? RetimeMode::TimeOptimal : RetimeMode::Optimise;
+    options_.alpha = p.get<double>("alpha");
+    options_.beta = p.get<double>("beta");
+    options_.solve.knot_spacing = p.get<double>("knot_spacing");
+    options_.inside_tolerance = p.get<double>("inside_tolerance");
+  }
+
+  void run(RunContext& ctx) const override {
+    const motion::Motion& motion = ctx.input<motion::Motion>("motion");
+    const Hulls& hulls = ctx.input<Hulls>("hulls");
+    const PathTorques& torques = ctx.input<PathTorques>("torques");
+    if (motion.frame_count() != static_cast<int>(hulls.frames.size()) ||
+        torques.frame_count() != motion.frame_count())
+      throw std::invalid_argument("the motion has " + std::to_string(motion.frame_count()) + " frames, the hulls " +
+                                  std::to_string(hulls.frames.size()) + " and the torques " +
+                                  std::to_string(torques.frame_count()) + " (expected the same clip)");
+    ClipRetimeOptions options = options_;
+    options.solve.duration = duration_ > 0 ? duration_ : duration_scale_ * motion.duration();
+    std::vector<Eigen::VectorXd> reference;
+    if (options.target == TorqueTarget::Reference) {
+      if (!ctx.has_input("reference_hulls") || !ctx.has_input("reference_torques"))
+        throw std::invalid_argument("objective 'reference' needs reference_hulls and reference_torques connected");
+      const PathTorques& rt = ctx.input<PathTorques>("reference_torques");
+      reference = original_torques(ctx.input<Hulls>("reference_hulls"), rt.frames);
+    }
+    const ClipRetime r = retime_clip(hulls, torques.frames, motion.fps, options, *motion.skeleton, reference);
+    ctx.log(r.message);
+    ctx.report("duration", r.warp.duration);
+    ctx.report("source_duration", motion.duration());
+    ctx.report("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
+    ctx.report("iterations", static_cast<std::int64_t>(r.solve.iterations));
+    ctx.report("solve_seconds", r.solve.seconds);
+    ctx.report("objective_feasibility", r.feasibility);
+    ctx.report("objective_torque", r.torque);
+    ctx.report("torque_scale", r.torque_scale);
+    ctx.report("share_inside", r.share_inside);
+    ctx.report("share_at_point", r.share_at_point);
+    if (r.shortest && r.shortest->feasible) ctx.report("shortest_duration", r.shortest->duration);
+    ctx.report("message", r.message);
+    if (r.warp.controls.empty()) throw std::runtime_error(r.message);  // time-optimal with no feasible timing
+    if (strict_ && !r.feasible) throw std::runtime_error(r.message);
+
+    const double fps = fps_ > 0 ? fps_ : motion.fps;
+    if (!curves_.empty()) {
+      const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
+      graph::write_file_atomically(curves_, [&](std::ostream& os) {
+        json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
+      });
+    }
+    if (!forces_.empty())
+      graph::write_file_atomically(
+          forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
+    if (!report_.empty())
+      graph::write_file_atomically(report_, [&](std::ostream& os) {
+        graph::JsonWriter w(os);
+        w.begin_object();
+        w.field("clip", motion.name);
+        w.field("objective", to_string(options.target));
+        w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
+        w.field("source_duration", motion.duration());
+        w.field("duration", r.warp.duration);
+        w.field("converged", r.solve.converged);
+        w.field("iterations", r.solve.iterations);
+        w.field("solve_seconds", r.solve.seconds);
+        w.field("objective_feasibility", r.feasibility);
+        w.field("objective_torque", r.torque);
+        w.field("torque_scale_nm", r.torque_scale);
+        w.field("share_inside", r.share_inside);
+        w.field("share_at_point", r.share_at_point);
+        w.field("output_frames", r.output_frames);
+        w.field("frames_feasible", hulls.count(HullStatus::Feasible));
+        w.field("frames_flight", hulls.count(HullStatus::Flight));
+        w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
+        if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
+        w.field("feasible", r.feasible);
+        w.field("message", r.message);
+        w.end_object();
+        os << '\n';
+      });
+    ctx.output("warp", r.warp);
+    ctx.output("motion", retimed_motion(motion, r.warp, fps));
+  }
+
+ private:
+  double duration_scale_, duration_, fps_;
+  std::string curves_, forces_, report_;
+  bool strict_;
+  ClipRetimeOptions options_;
+};
+
+NodeType retime_node_type() {
+  NodeSpec spec{
+      .type = "retime.retime",
+      .version = 1,
+      .doc = "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic spline, "
+             "that minimises α·(distance to each frame's hull)² + β·|τ − τ'|² over the output (eq. 14, baked per "
+             "frame and sector), with the ends kept, the duration given and any pins (source moments at output "
+             "times) met exactly, by L-BFGS; τ' keeps the look (match), least effort (minimal) or another clip's "
+             "(reference). mode time_optimal finds the shortest playback within the hulls instead. The result "
+             "reports the share of output frames inside their hulls and, when the duration asks the impossible, "
+             "the shortest feasible one.",
+      .inputs = {{"motion", "kg.Motion", true, "the source clip (the one the hulls were built for)"},
+                 {"hulls", "kg.Hulls", true, "per-frame hulls and force model (retime.hulls)"},
+                 {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (retime.hulls)"},
+                 {"reference_hulls", "kg.Hulls", false, "objective reference: the other clip's hulls"},
+                 {"reference_torques", "kg.PathTorques", false, "objective reference: the other clip's torques"}},
+      .outputs = {{"motion", "kg.Motion", true, "the retimed clip at `fps`"},
+                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"}},
+      .params = {
+          {.name = "duration_scale",
+           .type = ParamType::Float,
+           .default_value = 0.5,
+           .doc = "output duration as a multiple of the source's (used when `duration` is 0)",
+           .min = 1e-3,
+           .max = 1e3},
+          {.name = "duration",
+           .type = ParamType::Float,
+           .default_value = 0.0,
+           .doc = "output duration, s; 0: duration_scale times the source's",
+           .min = 0.0,
+           .max = 1e6},
+          {.name = "pin_source",
+           .type = ParamType::FloatList,
+           .default_value = std::vector<double>{},
+           .doc = "source moments (s) pinned to the output times of pin_output, pairwise"},
+          {.name = "pin_output",
+           .type = ParamType::FloatList,
+           .default_value = std::vector<double>{},
+           .doc = "output times (s) at which the pin_source moments play"},
+          {.name = "objective",
+           .type = ParamType::Enum,
+           .default_value = std::string("match"),
+           .doc = "τ': match (the clip's own torques: keep the look), minimal (zero: least effort), reference "
+                  "(another clip's: wire reference_hulls and reference_torques)",
+           .choices = {"match", "minimal", "reference"}},
+          {.name = "mode",
+           .type = ParamType::Enum,
+           .default_value = std::string("optimise"),
+           .doc = "optimise (eq. 14 for the duration and pins) or time_optimal (the shortest feasible playback)",
+           .choices = {"optimise", "time_optimal"}},
+          {.name = "alpha",
+           .type = ParamType::Float,
+           .default_value = 1000.0,
+           .doc = "weight of the squared distance to the hulls (plane units²)",
+           .min = 0.0,
+           .max = 1e12},
+          {.name = "beta",
+           .type = ParamType::Float,
+           .default_value = 1.0,
+           .doc = "weight of the squared torque error, in units of the source's RMS joint torque",
+           .min = 0.0,
+           .max = 1e12},
+          {.name = "knot_spacing",
+           .type = ParamType::Float,
+           .default_value = 0.1,
+           .doc = "output seconds between the spline's control points",
+           .min = 1e-3,
+           .max = 1e3},
+          {.name = "inside_tolerance",
+           .type = ParamType::Float,
+           .default_value = 0.01,
+           .doc = "a timing this close to its hull (plane units) counts as inside, in the share reported",
+           .min = 0.0,
+           .max = 1e3},
+          {.name = "fps",
+           .type = ParamType::Float,
+           .default_value = 0.0,
+           .doc = "frame rate of the retimed clip; 0: the source's",
+           .min = 0.0,
+           .max = 1e5},
+          {.name = "curves",
+           .type = ParamType::OutputPath,
+           .default_value = std::string(),
+           .doc = "p(t), ṗ(t), p̈(t) per output frame: .csv, or .json; \"\" writes none"},
+          {.name = "forces",
+           .type = ParamType::OutputPath,
+           .default_value = std::string(),
+           .doc = "per source frame: hull, timing played, contact forces and torques (JSON); \"\" writes none"},
+          {.name = "report",
+           .type = ParamType::OutputPath,
+           .default_value = std::string(),
+           .doc = "the objective's parts, share of frames inside their hulls, convergence (JSON); \"\" writes none"},
+          {.name = "strict",
+           .type = ParamType::Bool,
+           .default_value = false,
+           .doc = "fail (non-zero exit, nothing written) when an output frame lies outside its hull"}}};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<RetimeNode>(p); }};
+}
+
+}  // namespace
+}  // namespace kg::retime
+
+namespace kg {
+
+std::vector<graph::NodeType> retime_node_types() {
+  std::vector<graph::NodeType> out;
+  out.push_back(retime::hulls_node_type());
+  out.push_back(retime::retime_node_type());
+  return out;
+}
+
+}  // namespace kg

@@ -1,0 +1,155 @@
+#include "kg/retime/retimer.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <stdexcept>
+
+#include <ceres/first_order_function.h>
+#include <ceres/gradient_problem.h>
+#include <ceres/gradient_problem_solver.h>
+#include <Eigen/QR>
+
+namespace kg::retime {
+
+double integrate(const PathObjective& objective, const TimeWarp& warp, int samples, double* gradient) {
+  const int n = std::max(samples, 2);
+  const double dt = warp.duration / (n - 1);
+  if (gradient) std::fill(gradient, gradient + warp.controls.size(), 0.0);
+  double total = 0;
+  int hint = 0;
+  for (int k = 0; k < n; ++k) {
+    const double w = (k == 0 || k == n - 1) ? dt / 2 : dt;
+    const WarpSample s = warp.sample(k * dt);
+    const SampleCost cost = objective.evaluate(s.p, s.pddot, s.pdot * s.pdot, hint);
+    total += w * cost.value;
+    if (!gradient) continue;
+    for (int i = 0; i < 4; ++i)
+      gradient[s.first + i] += w * (cost.d_p * s.weight[i] + cost.d_pddot * s.weight_second[i] +
+                                    cost.d_pdot2 * 2 * s.pdot * s.weight_first[i]);
+  }
+  return total;
+}
+
+int grid_samples(const TimeWarp& warp, double source_fps, int samples_per_frame) {
+  // The fastest playback bounds how much source time one output step covers.
+  double fastest = 0;
+  const int checks = 8 * (warp.segments() + 1);
+  for (int k = 0; k <= checks; ++k) fastest = std::max(fastest, warp.sample(warp.duration * k / checks).pdot);
+  const double per_second = fastest * source_fps * samples_per_frame;
+  return std::max(2, static_cast<int>(std::ceil(warp.duration * per_second)) + 1);
+}
+
+namespace {
+
+class WarpFunction final : public ceres::FirstOrderFunction {
+ public:
+  WarpFunction(const PathObjective& objective, TimeWarp warp, Eigen::VectorXd particular, Eigen::MatrixXd basis,
+               int samples, double barrier)
+      : objective_(objective),
+        warp_(std::move(warp)),
+        particular_(std::move(particular)),
+        basis_(std::move(basis)),
+        samples_(samples),
+        barrier_(barrier),
+        gradient_(particular_.size()) {
+    reference_step_ = warp_.source_duration / std::max(1, warp_.segments());
+  }
+
+  int NumParameters() const override { return static_cast<int>(basis_.cols()); }
+
+  bool Evaluate(const double* parameters, double* cost, double* gradient) const override {
+    ++evaluations_;
+    const Eigen::Map<const Eigen::VectorXd> y(parameters, NumParameters());
+    const Eigen::VectorXd c = particular_ + basis_ * y;
+    std::copy(c.data(), c.data() + c.size(), warp_.controls.begin());
+    if (!warp_.strictly_increasing()) return false;
+    *cost = integrate(objective_, warp_, samples_, gradient ? gradient_.data() : nullptr);
+    if (!std::isfinite(*cost)) return false;
+    for (Eigen::Index j = 1; j < c.size(); ++j) {
+      const double step = c[j] - c[j - 1];
+      *cost -= barrier_ * std::log(step / reference_step_);
+      if (gradient) {
+        gradient_[j] -= barrier_ / step;
+        gradient_[j - 1] += barrier_ / step;
+      }
+    }
+    if (gradient) Eigen::Map<Eigen::VectorXd>(gradient, NumParameters()) = basis_.transpose() * gradient_;
+    return true;
+  }
+
+  Eigen::VectorXd controls(const double* parameters) const {
+    return particular_ + basis_ * Eigen::Map<const Eigen::VectorXd>(parameters, NumParameters());
+  }
+  int evaluations() const { return evaluations_; }
+
+ private:
+  const PathObjective& objective_;
+  mutable TimeWarp warp_;
+  Eigen::VectorXd particular_;
+  Eigen::MatrixXd basis_;
+  int samples_;
+  double barrier_;
+  double reference_step_ = 1;
+  mutable Eigen::VectorXd gradient_;
+  mutable int evaluations_ = 0;
+};
+
+}  // namespace
+
+RetimeResult retime(const PathObjective& objective, const RetimeOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing))
+    throw std::invalid_argument("retime: knot spacing " + std::to_string(options.knot_spacing) + " s (expected > 0)");
+  if (options.samples_per_frame < 1)
+    throw std::invalid_argument("retime: " + std::to_string(options.samples_per_frame) +
+                                " samples per frame (expected >= 1)");
+  const double source_duration = objective.source_duration();
+  const int segments = std::max(1, static_cast<int>(std::ceil(options.duration / options.knot_spacing - 1e-9)));
+  TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins);
+  const WarpConstraints constraints = warp_constraints(source_duration, options.duration, segments, options.pins);
+
+  // controls = particular + basis * y for every y: the constraints' null space (orthonormal).
+  const Eigen::Map<const Eigen::VectorXd> start_controls(warp.controls.data(), static_cast<Eigen::Index>(warp.controls.size()));
+  Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(constraints.A.transpose());
+  const Eigen::Index rank = qr.rank();
+  const Eigen::MatrixXd q = qr.householderQ();
+  const Eigen::MatrixXd basis = q.rightCols(q.cols() - rank);
+  const Eigen::VectorXd particular = start_controls - basis * (basis.transpose() * start_controls);
+
+  RetimeResult result;
+  int samples = grid_samples(warp, objective.source_fps(), options.samples_per_frame);
+  const double initial_cost = std::abs(integrate(objective, warp, samples));
+  const double barrier = 1e-6 * initial_cost / (segments + 3) + 1e-12;
+  Eigen::VectorXd y = basis.transpose() * (start_controls - particular);
+  for (int round = 0; round < 4; ++round) {
+    auto* function = new WarpFunction(objective, warp, particular, basis, samples, barrier);
+    ceres::GradientProblem problem(function);  // takes ownership
+    ceres::GradientProblemSolver::Options solver_options;
+    solver_options.line_search_direction_type = ceres::LBFGS;
+    solver_options.max_num_iterations = options.max_iterations;
+    solver_options.function_tolerance = options.function_tolerance;
+    solver_options.gradient_tolerance = options.gradient_tolerance;
+    solver_options.parameter_tolerance = 1e-14;
+    solver_options.logging_type = ceres::SILENT;
+    ceres::GradientProblemSolver::Summary summary;
+    if (y.size() > 0) ceres::Solve(solver_options, problem, y.data(), &summary);
+    const Eigen::VectorXd c = function->controls(y.data());
+    warp.controls.assign(c.data(), c.data() + c.size());
+    result.iterations += static_cast<int>(summary.iterations.size());
+    result.evaluations += function->evaluations();
+    result.converged = y.size() == 0 || summary.termination_type == ceres::CONVERGENCE;
+    result.message = y.size() == 0 ? "the constraints fix the warp" : summary.message;
+    const int needed = grid_samples(warp, objective.source_fps(), options.samples_per_frame);
+    if (needed <= samples) break;
+    result.message += "; grid refined from " + std::to_string(samples) + " to " + std::to_string(needed) + " samples";
+    samples = needed;
+  }
+  result.warp = warp;
+  result.samples = samples;
+  result.objective = integrate(objective, warp, samples);
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace kg::retime

@@ -1,0 +1,178 @@
+#include "kg/retime/timewarp.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/LU>
+#include <Eigen/QR>
+
+#include "kg/retarget/bspline.hpp"
+
+namespace kg::retime {
+
+namespace {
+
+std::string seconds(double s) {
+  std::ostringstream out;
+  out.precision(6);
+  out << s << " s";
+  return out.str();
+}
+
+void check_sizes(double source_duration, double duration, int segments) {
+  if (!(std::isfinite(source_duration) && source_duration > 0))
+    throw std::invalid_argument("time warp: source duration " + seconds(source_duration) + " (expected > 0)");
+  if (!(std::isfinite(duration) && duration > 0))
+    throw std::invalid_argument("time warp: duration " + seconds(duration) + " (expected > 0)");
+  if (segments < 1) throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments (expected >= 1)");
+}
+
+// The weights of p at output time t on a warp of the given layout.
+WarpSample basis(double duration, int segments, double t) {
+  const double h = duration / segments;
+  const double u = std::clamp(t, 0.0, duration) / h;
+  const int segment = std::clamp(static_cast<int>(std::floor(u)), 0, segments - 1);
+  const retarget::CubicWeights w = retarget::cubic_bspline_weights(u - segment);
+  WarpSample s;
+  s.first = segment;
+  for (int i = 0; i < 4; ++i) {
+    s.weight[i] = w.value[i];
+    s.weight_first[i] = w.first[i] / h;
+    s.weight_second[i] = w.second[i] / (h * h);
+  }
+  return s;
+}
+
+}  // namespace
+
+WarpSample TimeWarp::sample(double t) const {
+  WarpSample s = basis(duration, segments(), t);
+  for (int i = 0; i < 4; ++i) {
+    const double c = controls[static_cast<std::size_t>(s.first + i)];
+    s.p += s.weight[i] * c;
+    s.pdot += s.weight_first[i] * c;
+    s.pddot += s.weight_second[i] * c;
+  }
+  return s;
+}
+
+bool TimeWarp::strictly_increasing(double margin) const {
+  for (std::size_t j = 1; j < controls.size(); ++j)
+    if (!(controls[j] - controls[j - 1] > margin)) return false;
+  return true;
+}
+
+TimeWarp TimeWarp::uniform(double source_duration, double duration, int segments) {
+  check_sizes(source_duration, duration, segments);
+  TimeWarp warp{duration, source_duration, std::vector<double>(static_cast<std::size_t>(segments + 3))};
+  const double speed = source_duration / duration, h = duration / segments;
+  // A linear function's B-spline controls are its values at the controls' sites.
+  for (int j = 0; j < segments + 3; ++j) warp.controls[static_cast<std::size_t>(j)] = speed * (j - 1) * h;
+  return warp;
+}
+
+WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins) {
+  check_sizes(source_duration, duration, segments);
+  std::vector<Pin> sorted = pins;
+  std::sort(sorted.begin(), sorted.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  for (std::size_t i = 0; i < sorted.size(); ++i) {
+    const Pin& pin = sorted[i];
+    const std::string name = "pin (source " + seconds(pin.source_time) + " at output " + seconds(pin.output_time) + ")";
+    if (!(pin.output_time > 0 && pin.output_time < duration))
+      throw std::invalid_argument("time warp: " + name + ": output time outside (0, " + seconds(duration) + ")");
+    if (!(pin.source_time > 0 && pin.source_time < source_duration))
+      throw std::invalid_argument("time warp: " + name + ": source time outside (0, " + seconds(source_duration) +
+                                  ")");
+    if (i > 0) {
+      const Pin& before = sorted[i - 1];
+      if (pin.output_time == before.output_time)
+        throw std::invalid_argument("time warp: two pins at output " + seconds(pin.output_time));
+      if (!(pin.source_time > before.source_time))
+        throw std::invalid_argument("time warp: contradictory pins: source " + seconds(before.source_time) +
+                                    " at output " + seconds(before.output_time) + " but source " +
+                                    seconds(pin.source_time) + " later, at output " + seconds(pin.output_time) +
+                                    " (playback cannot run backwards)");
+    }
+  }
+  const int controls = segments + 3;
+  WarpConstraints c{Eigen::MatrixXd::Zero(2 + static_cast<int>(sorted.size()), controls),
+                    Eigen::VectorXd::Zero(2 + static_cast<int>(sorted.size()))};
+  auto add_row = [&](int row, double t, double value) {
+    const WarpSample s = basis(duration, segments, t);
+    for (int i = 0; i < 4; ++i) c.A(row, s.first + i) = s.weight[i];
+    c.b[row] = value;
+  };
+  add_row(0, 0.0, 0.0);
+  add_row(1, duration, source_duration);
+  for (std::size_t i = 0; i < sorted.size(); ++i)
+    add_row(2 + static_cast<int>(i), sorted[i].output_time, sorted[i].source_time);
+  return c;
+}
+
+TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins) {
+  const WarpConstraints constraints = warp_constraints(source_duration, duration, segments, pins);
+  // Knots of the piecewise-linear playback: the ends and the pins in output order.
+  std::vector<Pin> knots = pins;
+  knots.push_back({0, 0});
+  knots.push_back({source_duration, duration});
+  std::sort(knots.begin(), knots.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  auto linear = [&](double t) {
+    std::size_t i = 1;
+    while (i + 1 < knots.size() && knots[i].output_time < t) ++i;
+    const Pin &a = knots[i - 1], &b = knots[i];
+    return a.source_time + (t - a.output_time) * (b.source_time - a.source_time) / (b.output_time - a.output_time);
+  };
+  TimeWarp warp = TimeWarp::uniform(source_duration, duration, segments);
+  const double h = warp.knot_spacing();
+  Eigen::VectorXd c(segments + 3);
+  for (int j = 0; j < segments + 3; ++j) c[j] = linear((j - 1) * h);
+  // The nearest controls meeting the constraints exactly (least-norm correction).
+  const Eigen::MatrixXd& A = constraints.A;
+  const Eigen::VectorXd correction =
+      A.transpose() * (A * A.transpose()).fullPivLu().solve(constraints.b - A * c);
+  c += correction;
+  warp.controls.assign(c.data(), c.data() + c.size());
+  if (!warp.strictly_increasing() || (A * c - constraints.b).cwiseAbs().maxCoeff() > 1e-9 * source_duration) {
+    double closest = duration;
+    for (std::size_t i = 1; i < knots.size(); ++i) closest = std::min(closest, knots[i].output_time - knots[i - 1].output_time);
+    throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments of " + seconds(h) +
+                                " cannot pass the pins increasingly; the closest pins (or ends) are " +
+                                seconds(closest) + " apart: use shorter segments");
+  }
+  return warp;
+}
+
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments) {
+  if (output_times.size() != source_times.size() || output_times.size() < 2)
+    throw std::invalid_argument("time warp fit: " + std::to_string(output_times.size()) + " output times and " +
+                                std::to_string(source_times.size()) + " source times (expected equal, >= 2)");
+  const double duration = output_times.back(), source_duration = source_times.back();
+  check_sizes(source_duration, duration, segments);
+  const int controls = segments + 3;
+  // Normal equations of the fit, bordered by the two end rows (KKT).
+  const WarpConstraints ends = warp_constraints(source_duration, duration, segments, {});
+  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(controls + 2, controls + 2);
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(controls + 2);
+  for (std::size_t k = 0; k < output_times.size(); ++k) {
+    const WarpSample s = basis(duration, segments, output_times[k]);
+    for (int i = 0; i < 4; ++i) {
+      rhs[s.first + i] += s.weight[i] * source_times[k];
+      for (int j = 0; j < 4; ++j) kkt(s.first + i, s.first + j) += s.weight[i] * s.weight[j];
+    }
+  }
+  // A whisper of smoothness keeps controls that no sample reaches determined.
+  for (int j = 0; j + 1 < controls; ++j) {
+    const double w = 1e-9;
+    kkt(j, j) += w, kkt(j + 1, j + 1) += w, kkt(j, j + 1) -= w, kkt(j + 1, j) -= w;
+  }
+  kkt.block(controls, 0, 2, controls) = ends.A;
+  kkt.block(0, controls, controls, 2) = ends.A.transpose();
+  rhs.tail(2) = ends.b;
+  const Eigen::VectorXd solution = kkt.fullPivLu().solve(rhs);
+  TimeWarp warp{duration, source_duration, std::vector<double>(solution.data(), solution.data() + controls)};
+  return warp;
+}
+
+}  // namespace kg::retime

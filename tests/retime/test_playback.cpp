@@ -1,0 +1,50 @@
+#include <catch2/catch.hpp>
+
+#include <sstream>
+
+#include "kg/retime/playback.hpp"
+
+using namespace kg;
+
+namespace {
+
+motion::Motion ramp(int frames, double fps) {
+  auto skeleton = std::make_shared<motion::Skeleton>();
+  skeleton->add_joint({.name = "root",
+                       .channels = {{.kind = motion::ChannelKind::Xposition}, {.kind = motion::ChannelKind::Zrotation}}});
+  motion::Motion m{skeleton, motion::FrameMatrix::Zero(frames, 2), fps, "ramp"};
+  for (int f = 0; f < frames; ++f) m.values(f, 0) = f * 0.1, m.values(f, 1) = 0.01 * f;
+  return m;
+}
+
+}  // namespace
+
+TEST_CASE("playing a clip through a uniform warp at double speed keeps every other frame") {
+  const motion::Motion source = ramp(61, 30);  // 2 s
+  const retime::TimeWarp warp = retime::TimeWarp::uniform(2.0, 1.0, 10);
+  const motion::Motion out = retime::retimed_motion(source, warp, 30);
+  REQUIRE(out.frame_count() == 31);
+  for (int k = 0; k < 31; ++k) {
+    CHECK(out.values(k, 0) == Approx(source.values(2 * k, 0)).margin(1e-9));
+    CHECK(out.values(k, 1) == Approx(source.values(2 * k, 1)).margin(1e-9));
+  }
+  CHECK(out.fps == 30);
+}
+
+TEST_CASE("a warp for another clip's duration is refused; curves are written per output frame") {
+  const motion::Motion source = ramp(61, 30);
+  CHECK_THROWS_WITH(retime::retimed_motion(source, retime::TimeWarp::uniform(3.0, 1.0, 10), 30),
+                    Catch::Matchers::Contains("lasts 2"));
+  std::ostringstream csv, json;
+  const retime::TimeWarp warp = retime::TimeWarp::uniform(2.0, 1.0, 10);
+  retime::write_warp_csv(csv, warp, 10);
+  std::string line;
+  std::istringstream lines(csv.str());
+  int rows = 0;
+  std::getline(lines, line);
+  CHECK(line == "t,p,pdot,pddot");
+  while (std::getline(lines, line)) ++rows;
+  CHECK(rows == 11);
+  retime::write_warp_json(json, warp, 10);
+  CHECK_THAT(json.str(), Catch::Matchers::Contains("\"pdot\":[2"));
+}

@@ -1,0 +1,53 @@
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "kg/retime/time_optimal.hpp"
+
+using namespace kg::retime;
+
+namespace {
+
+Polygon box(double a_lo, double a_hi, double b_lo, double b_hi) {
+  return {{a_lo, b_lo}, {a_hi, b_lo}, {a_hi, b_hi}, {a_lo, b_hi}};
+}
+
+}  // namespace
+
+TEST_CASE("time-optimal playback under an acceleration bound and a slow middle is bang-bang") {
+  // 3 s of source at 30 fps; |p̈| <= 1 everywhere, ṗ² <= 4 except <= 1 for source seconds 1 to 2.
+  const double fps = 30;
+  std::vector<Polygon> hulls;
+  for (int i = 0; i <= 90; ++i) hulls.push_back(box(-1, 1, 0, i >= 30 && i <= 60 ? 1 : 4));
+  const TimeOptimalResult r = time_optimal(hulls, fps, {});
+  REQUIRE(r.feasible);
+  // Decelerating from ṗ² = 3 to 1 over the first second, 1 through the middle, accelerating back
+  // to 3: 2 (√3 - 1) + 1 s.
+  CHECK(r.duration == Approx(2 * (std::sqrt(3.0) - 1) + 1).epsilon(0.01));
+  CHECK(r.pdot_squared.front() == Approx(3).epsilon(0.02));
+  CHECK(r.pdot_squared[45] == Approx(1).epsilon(1e-9));
+  for (std::size_t i = 0; i + 1 < r.pdot_squared.size(); ++i) {
+    const double a = (r.pdot_squared[i + 1] - r.pdot_squared[i]) * fps / 2;
+    CHECK(std::abs(a) <= 1 + 1e-9);
+  }
+  // The fitted spline plays the profile.
+  CHECK(r.warp.duration == Approx(r.duration));
+  CHECK(r.warp.at(r.output_times[45]) == Approx(1.5).margin(0.01));
+}
+
+TEST_CASE("time-optimal playback reports the frame no timing can pass") {
+  std::vector<Polygon> hulls(10, box(-1, 1, 2, 3));
+  for (int i = 5; i < 10; ++i) hulls[static_cast<std::size_t>(i)] = box(-1, 1, 0, 0.5);
+  const TimeOptimalResult r = time_optimal(hulls, 30, {});
+  CHECK_FALSE(r.feasible);
+  CHECK(r.blocking_frame == 4);
+  CHECK_THAT(r.message, Catch::Matchers::Contains("source frame 4"));
+}
+
+TEST_CASE("a point hull admits a box around it, so a ballistic stretch passes at its own speed") {
+  std::vector<Polygon> hulls(30, box(-5, 5, 0, 9));
+  for (int i = 10; i < 20; ++i) hulls[static_cast<std::size_t>(i)] = {{0.0, 1.0}};
+  const TimeOptimalResult r = time_optimal(hulls, 30, {});
+  REQUIRE(r.feasible);
+  for (int i = 10; i < 20; ++i) CHECK(r.pdot_squared[static_cast<std::size_t>(i)] == Approx(1).epsilon(0.051));
+}
