@@ -126,17 +126,23 @@ void check_body_model(const BodyModel& body, const char* who) {
     throw std::invalid_argument(std::string(who) + ": the body model has " +
                                 std::to_string(body.segments.size()) + " segments for " +
                                 str(s.joint_count()) + " joints (expected one per joint)");
+  // Called on every frame: the message is built only on failure.
   for (int j = 0; j < s.joint_count(); ++j) {
     const SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
-    const std::string name = std::string(who) + ": segment '" + s.joint(j).name + "'";
+    const char* problem = nullptr;
+    const Eigen::Matrix3d& I = seg.inertia;
     if (!std::isfinite(seg.mass) || seg.mass < 0)
-      throw std::invalid_argument(name + ": mass " + std::to_string(seg.mass) +
-                                  " kg (expected finite, >= 0)");
-    if (!seg.com.allFinite()) throw std::invalid_argument(name + ": centre of mass is not finite");
-    if (!seg.inertia.allFinite()) throw std::invalid_argument(name + ": inertia is not finite");
-    const double tol = 1e-9 * std::max(1.0, seg.inertia.cwiseAbs().maxCoeff());
-    if ((seg.inertia - seg.inertia.transpose()).cwiseAbs().maxCoeff() > tol)
-      throw std::invalid_argument(name + ": inertia is not symmetric");
+      problem = "mass is negative or not finite";
+    else if (!seg.com.allFinite())
+      problem = "centre of mass is not finite";
+    else if (!I.allFinite())
+      problem = "inertia is not finite";
+    else if (std::abs(I(0, 1) - I(1, 0)) + std::abs(I(0, 2) - I(2, 0)) + std::abs(I(1, 2) - I(2, 1)) >
+             1e-9 * std::max(1.0, I.cwiseAbs().maxCoeff()))
+      problem = "inertia is not symmetric";
+    if (problem)
+      throw std::invalid_argument(std::string(who) + ": segment '" + s.joint(j).name + "': " + problem +
+                                  " (mass " + std::to_string(seg.mass) + " kg)");
   }
 }
 

@@ -1,6 +1,7 @@
 // Inverse dynamics (dynamics.hpp, rnea.hpp):
 //   - τ equals KDL's ChainIdSolver_RNE on fixed-base chains (random lengths, channel orders, ASF
-//     axes, position channels, masses, inertias, external forces);
+//     axes, position channels, masses, inertias, external forces), and KDL's TreeIdSolver_RNE on
+//     floating-base trees (root channels as joints from KDL's base) and a CMU skeleton;
 //   - on floating-base trees (several roots, position channels on any joint, a rotated
 //     file_to_world) and on CMU and Bandai clips: τ = M q̈ + C + G with M from the composite rigid
 //     body algorithm, M against the kinetic energy of forward kinematics, C against the Lagrangian
@@ -23,8 +24,10 @@
 #include <catch2/catch.hpp>
 
 #ifdef KG_HAVE_KDL
-#include <kdl/chain.hpp>
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
+#include <kdl/treeidsolver_recursive_newton_euler.hpp>
+
+#include "../support/kdl_body.hpp"
 #endif
 
 #include "kg/io/asf_amc.hpp"
@@ -161,56 +164,6 @@ std::vector<retime::ExternalForce> random_forces(const motion::Skeleton& s, std:
                  .torque = rng() % 2 ? random_vector(rng, 10) : Eigen::Vector3d::Zero()});
   return f;
 }
-
-#ifdef KG_HAVE_KDL
-
-KDL::Vector kdl(const Eigen::Vector3d& v) {
-  return {v.x(), v.y(), v.z()};
-}
-
-// The same chain as KDL segments: per joint a fixed segment for its offset (position channels'
-// components zeroed, as they replace them), one TransX/Y/Z segment per position channel, one
-// RotAxis segment per rotation channel (axis = ASF axis * unit axis), the last carrying the
-// segment's inertia in the joint's frame. KDL's joint order is then DynamicsTopology's order.
-struct KdlChain {
-  KDL::Chain chain;
-  std::vector<int> last_segment;  // per joint
-};
-
-KdlChain to_kdl(const BodyModel& body) {
-  const motion::Skeleton& s = *body.skeleton;
-  KdlChain k;
-  for (int j = 0; j < s.joint_count(); ++j) {
-    const motion::Joint& jt = s.joint(j);
-    REQUIRE(jt.parent == j - 1);
-    std::vector<KDL::Joint> joints;
-    Eigen::Vector3d offset = jt.offset;
-    for (const motion::Channel& c : jt.channels)
-      if (!motion::is_rotation(c.kind)) {
-        offset[motion::axis_index(c.kind)] = 0;
-        const KDL::Joint::JointType t[] = {KDL::Joint::TransX, KDL::Joint::TransY, KDL::Joint::TransZ};
-        joints.emplace_back(t[motion::axis_index(c.kind)]);
-      }
-    for (const motion::Channel& c : jt.channels)
-      if (motion::is_rotation(c.kind))
-        joints.emplace_back(KDL::Vector::Zero(), kdl(jt.axis.col(motion::axis_index(c.kind))),
-                            KDL::Joint::RotAxis);
-    const retime::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
-    const Eigen::Matrix3d& I = seg.inertia;
-    const KDL::RigidBodyInertia inertia(
-        seg.mass, kdl(seg.com), KDL::RotationalInertia(I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2)));
-    const KDL::Frame offset_frame(kdl(offset));
-    k.chain.addSegment(KDL::Segment(KDL::Joint(KDL::Joint::None), offset_frame,
-                                    joints.empty() ? inertia : KDL::RigidBodyInertia::Zero()));
-    for (std::size_t i = 0; i < joints.size(); ++i)
-      k.chain.addSegment(KDL::Segment(joints[i], KDL::Frame::Identity(),
-                                      i + 1 == joints.size() ? inertia : KDL::RigidBodyInertia::Zero()));
-    k.last_segment.push_back(static_cast<int>(k.chain.getNrOfSegments()) - 1);
-  }
-  return k;
-}
-
-#endif
 
 // A floating-base figure thrown through the air: a root (XYZ position, ZYX rotation) spinning at a
 // constant rate about its Y axis (a principal axis of the whole), tilted by a constant Z rotation,
@@ -417,6 +370,64 @@ void check_path_polynomials(const BodyModel& body, const motion::Motion& clip, c
 }  // namespace
 
 #ifdef KG_HAVE_KDL
+namespace {
+
+struct KdlInput {
+  KDL::JntArray q, qd, qdd;
+};
+
+// Our channel values in KDL's joint order (DynamicsTopology's).
+KdlInput kdl_input(const motion::Skeleton& s, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
+                   const Eigen::VectorXd& qdd) {
+  const std::vector<int> order = retime::DynamicsTopology::of(s).order;
+  const auto n = static_cast<unsigned>(order.size());
+  KdlInput in{KDL::JntArray(n), KDL::JntArray(n), KDL::JntArray(n)};
+  for (unsigned i = 0; i < n; ++i) {
+    in.q(i) = q[order[i]];
+    in.qd(i) = qd[order[i]];
+    in.qdd(i) = qdd[order[i]];
+  }
+  return in;
+}
+
+Eigen::VectorXd from_kdl(const motion::Skeleton& s, const KDL::JntArray& tau) {
+  const std::vector<int> order = retime::DynamicsTopology::of(s).order;
+  Eigen::VectorXd out(s.channel_count());
+  for (std::size_t i = 0; i < order.size(); ++i) out[order[i]] = tau(static_cast<unsigned>(i));
+  return out;
+}
+
+// KDL wants each external wrench in its segment's frame about that frame's origin.
+KDL::Wrench kdl_wrench(const retime::ExternalForce& p, const Eigen::Isometry3d& W) {
+  const Eigen::Vector3d moment = (p.point - W.translation()).cross(p.force) + p.torque;
+  return KDL::Wrench(test::kdl(Eigen::Vector3d(W.linear().transpose() * p.force)),
+                     test::kdl(Eigen::Vector3d(W.linear().transpose() * moment)));
+}
+
+// Ours against KDL's tree solver at random velocities, accelerations, gravity and pushes.
+void check_tree_against_kdl(const BodyModel& body, const Eigen::VectorXd& q, std::mt19937& rng) {
+  const motion::Skeleton& s = *body.skeleton;
+  const test::KdlBody k = test::kdl_body(body);
+  REQUIRE(static_cast<int>(k.tree.getNrOfJoints()) == s.channel_count());
+  const Eigen::VectorXd qd = random_values(s, rng, 2, 3), qdd = random_values(s, rng, 5, 10);
+  const Eigen::Vector3d g = random_vector(rng, 10);
+  const std::vector<retime::ExternalForce> pushes = random_forces(s, rng, 3);
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
+  motion::forward_kinematics(s, q.transpose(), world);
+  KDL::WrenchMap wrenches;
+  for (const retime::ExternalForce& p : pushes) {
+    KDL::Wrench& w = wrenches[k.last_segment[static_cast<std::size_t>(p.joint)]];
+    w = w + kdl_wrench(p, world[static_cast<std::size_t>(p.joint)]);
+  }
+  const KdlInput in = kdl_input(s, q, qd, qdd);
+  KDL::JntArray ktau(in.q.rows());
+  KDL::TreeIdSolver_RNE solver(k.tree, test::kdl(g));
+  REQUIRE(solver.CartToJnt(in.q, in.qd, in.qdd, wrenches, ktau) == 0);
+  check_close(retime::inverse_dynamics(body, q, qd, qdd, g, pushes), from_kdl(s, ktau), 1e-9);
+}
+
+}  // namespace
+
 TEST_CASE("inverse dynamics equals KDL's ChainIdSolver_RNE on fixed-base chains") {
   std::mt19937 rng(11);
   for (int links : {1, 2, 3, 5, 12, 30}) {
@@ -425,50 +436,60 @@ TEST_CASE("inverse dynamics equals KDL's ChainIdSolver_RNE on fixed-base chains"
       INFO(links << " links, trial " << trial);
       auto s = random_skeleton(rng, {.joints = links + 1, .positions = positions});
       const BodyModel body = random_body(s, rng);
-      const KdlChain k = to_kdl(body);
+      const test::KdlBody k = test::kdl_body(body);
       const int n = s->channel_count();
       REQUIRE(static_cast<int>(k.chain.getNrOfJoints()) == n);
-      const std::vector<int>& order = retime::DynamicsTopology::of(*s).order;  // KDL's joint order
 
       const Eigen::VectorXd q = random_values(*s, rng, 0.5, std::numbers::pi);
       const Eigen::VectorXd qd = random_values(*s, rng, 2, 3), qdd = random_values(*s, rng, 5, 10);
       const Eigen::Vector3d g = random_vector(rng, 10);
       const std::vector<retime::ExternalForce> pushes = random_forces(*s, rng, trial % 3);
-
-      KDL::JntArray kq(static_cast<unsigned>(n)), kqd(kq), kqdd(kq), ktau(kq);
-      for (int i = 0; i < n; ++i) {
-        kq(static_cast<unsigned>(i)) = q[order[static_cast<std::size_t>(i)]];
-        kqd(static_cast<unsigned>(i)) = qd[order[static_cast<std::size_t>(i)]];
-        kqdd(static_cast<unsigned>(i)) = qdd[order[static_cast<std::size_t>(i)]];
-      }
-      // KDL wants each external wrench in its segment's frame about that frame's origin.
       std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s->joint_count()));
       motion::forward_kinematics(*s, q.transpose(), world);
       KDL::Wrenches wrenches(k.chain.getNrOfSegments(), KDL::Wrench::Zero());
       for (const retime::ExternalForce& p : pushes) {
-        const Eigen::Isometry3d& W = world[static_cast<std::size_t>(p.joint)];
-        const Eigen::Vector3d moment = (p.point - W.translation()).cross(p.force) + p.torque;
         KDL::Wrench& w =
-            wrenches[static_cast<std::size_t>(k.last_segment[static_cast<std::size_t>(p.joint)])];
-        w = w + KDL::Wrench(kdl(W.linear().transpose() * p.force), kdl(W.linear().transpose() * moment));
+            wrenches[static_cast<std::size_t>(k.last_chain_segment[static_cast<std::size_t>(p.joint)])];
+        w = w + kdl_wrench(p, world[static_cast<std::size_t>(p.joint)]);
       }
-      KDL::ChainIdSolver_RNE solver(k.chain, kdl(g));
-      REQUIRE(solver.CartToJnt(kq, kqd, kqdd, wrenches, ktau) == 0);
-      Eigen::VectorXd expected(n);
-      for (int i = 0; i < n; ++i)
-        expected[order[static_cast<std::size_t>(i)]] = ktau(static_cast<unsigned>(i));
+      const KdlInput in = kdl_input(*s, q, qd, qdd);
+      KDL::JntArray ktau(in.q.rows());
+      KDL::ChainIdSolver_RNE solver(k.chain, test::kdl(g));
+      REQUIRE(solver.CartToJnt(in.q, in.qd, in.qdd, wrenches, ktau) == 0);
+      const Eigen::VectorXd expected = from_kdl(*s, ktau);
 
       retime::DynamicsWorkspace ws;
       Eigen::VectorXd tau(n);
       retime::inverse_dynamics(body, q, qd, qdd, g, pushes, ws, tau);
       check_close(tau, expected, 1e-9);
-      // The allocating overload and a reused workspace agree.
+      // The allocating overload agrees.
       check_close(retime::inverse_dynamics(body, q, qd, qdd, g, pushes), expected, 1e-9);
     }
   }
 }
+
+TEST_CASE("inverse dynamics equals KDL's TreeIdSolver_RNE on floating-base trees and a CMU skeleton") {
+  std::mt19937 rng(12);
+  for (int trial = 0; trial < 8; ++trial) {
+    INFO("trial " << trial);
+    auto s = random_skeleton(rng, {.joints = 10,
+                                   .chain = false,
+                                   .fixed_root = false,
+                                   .roots = 1 + trial % 3,
+                                   .positions = true,
+                                   .rotate_world = trial % 2 == 1});
+    const BodyModel body = random_body(s, rng);
+    check_tree_against_kdl(body, random_values(*s, rng, 2, std::numbers::pi), rng);
+  }
+  if (auto clip = load_cmu_walk()) {
+    const BodyModel body = random_body(clip->skeleton, rng);
+    check_tree_against_kdl(body, clip->values.row(clip->frame_count() / 2).transpose(), rng);
+  } else {
+    WARN("skipped: 16.asf / 16_15.amc not found in " << kData << "/cmu/asf_amc");
+  }
+}
 #else
-TEST_CASE("inverse dynamics equals KDL's ChainIdSolver_RNE on fixed-base chains") {
+TEST_CASE("inverse dynamics equals KDL's recursive Newton-Euler solvers") {
   WARN("skipped: built without KDL (Debian liborocos-kdl-dev, pkg-config orocos-kdl)");
 }
 #endif
