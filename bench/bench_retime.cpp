@@ -7,7 +7,7 @@
 //   RNEA            our inverse_dynamics, the same numbers (dynamics.hpp);
 //   Force           frame_torques: every coefficient of τ(ṗ², p̈, g), the paper's "Force";
 //   Force (k)       frame_torques_mass_scale: the same and their change with one segment's mass;
-//   Force / KDL     the target: at most 4.
+//   Force / KDL     the target: at most 4 (from back-to-back batches of the two).
 // Later steps (Feasible, Bake, Obj, NP-Obj, Naive) add rows to `rows` in main(): a row is a name
 // and a function timing one case. Times are the median over batches of the mean time per frame,
 // each batch running the whole clip as often as needed to last 20 ms.
@@ -49,24 +49,46 @@ double now() {
 
 volatile double g_sink = 0;  // keeps results observable
 
-// Median over batches of the mean seconds per call of work(f), f running over every frame.
-double seconds_per_frame(int frames, const std::function<void(int)>& work) {
-  for (int f = 0; f < frames; ++f) work(f);  // warm caches
-  double t0 = now();
+// How many passes over the clip make a batch of at least 20 ms (after a warm-up pass).
+int passes_for(int frames, const std::function<void(int)>& work) {
+  for (int f = 0; f < frames; ++f) work(f);
+  const double t0 = now();
   int passes = 0;
   do {
     for (int f = 0; f < frames; ++f) work(f);
     ++passes;
   } while (now() - t0 < 0.02);
+  return passes;
+}
+
+// Mean seconds per call of work(f) over `passes` passes over the clip.
+double batch(int frames, int passes, const std::function<void(int)>& work) {
+  const double t0 = now();
+  for (int p = 0; p < passes; ++p)
+    for (int f = 0; f < frames; ++f) work(f);
+  return (now() - t0) / (passes * frames);
+}
+
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+// Median over 9 batches of the mean seconds per call of work(f), f running over every frame.
+double seconds_per_frame(int frames, const std::function<void(int)>& work) {
+  const int passes = passes_for(frames, work);
   std::vector<double> batches;
-  for (int b = 0; b < 9; ++b) {
-    t0 = now();
-    for (int p = 0; p < passes; ++p)
-      for (int f = 0; f < frames; ++f) work(f);
-    batches.push_back((now() - t0) / (passes * frames));
-  }
-  std::nth_element(batches.begin(), batches.begin() + 4, batches.end());
-  return batches[4];
+  for (int b = 0; b < 9; ++b) batches.push_back(batch(frames, passes, work));
+  return median(batches);
+}
+
+// Median over 9 pairs of batches, run back to back, of time(a) / time(b): a ratio that holds when
+// the machine's load drifts between rows.
+double paired_ratio(int frames, const std::function<void(int)>& a, const std::function<void(int)>& b) {
+  const int pa = passes_for(frames, a), pb = passes_for(frames, b);
+  std::vector<double> ratios;
+  for (int i = 0; i < 9; ++i) ratios.push_back(batch(frames, pa, a) / batch(frames, pb, b));
+  return median(ratios);
 }
 
 // A rod of `mass` kg from the joint's origin to `tip` (joint frame): centre of mass halfway, inertia
@@ -276,7 +298,6 @@ int main(int argc, char** argv) {
   std::printf("\n%-14s", "frames");
   for (const auto& c : cases) std::printf("%10d", c->clip.frame_count());
   std::printf("\n");
-  std::vector<std::vector<std::optional<double>>> table;
   for (const Row& row : rows) {
     std::printf("%-14s", row.name.c_str());
     std::fflush(stdout);
@@ -290,15 +311,30 @@ int main(int argc, char** argv) {
       std::fflush(stdout);
     }
     std::printf("\n");
-    table.push_back(times);
   }
-  // Rows 0 and 2: KDL and Force.
+  // The target, from back-to-back batches of frame_torques and KDL (not the rows above,
+  // which may have run under different loads).
   std::printf("%-14s", "Force / KDL");
-  for (std::size_t i = 0; i < cases.size(); ++i)
-    if (table[0][i] && table[2][i])
-      std::printf("%10.2f", *table[2][i] / *table[0][i]);
-    else
-      std::printf("%10s", "-");
+  for (const auto& c : cases) {
+#ifdef KG_HAVE_KDL
+    retime::DynamicsWorkspace ws;
+    retime::FrameTorques out;
+    KDL::JntArray tau(static_cast<unsigned>(c->clip.skeleton->channel_count()));
+    const double r = paired_ratio(
+        c->clip.frame_count(),
+        [&](int f) {
+          retime::frame_torques(c->body, c->clip, c->d, f, ws, out);
+          g_sink = out.velocity[0];
+        },
+        [&](int f) {
+          c->kdl(f, tau);
+          g_sink = tau(0);
+        });
+    std::printf("%10.2f", r);
+#else
+    std::printf("%10s", "-");
+#endif
+  }
   std::printf("\n");
 
 #ifdef KG_HAVE_KDL
