@@ -19,6 +19,7 @@ std::vector<graph::NodeType> retarget_target_node_types();
 std::vector<graph::NodeType> retarget_constraint_node_types();
 std::vector<graph::NodeType> retarget_spacetime_node_types();  // retarget.spacetime
 std::vector<graph::NodeType> retarget_metrics_node_types();    // retarget.per_frame_ik, retarget.metrics
+std::vector<graph::NodeType> retime_body_node_types();         // retime.body_model (nodes/retime)
 
 // Every built-in node type (the lists above, in that order).
 std::vector<graph::NodeType> builtin_node_types();
