@@ -19,7 +19,8 @@ std::vector<graph::NodeType> retarget_target_node_types();
 std::vector<graph::NodeType> retarget_constraint_node_types();
 std::vector<graph::NodeType> retarget_spacetime_node_types();  // retarget.spacetime
 std::vector<graph::NodeType> retarget_metrics_node_types();    // retarget.per_frame_ik, retarget.metrics
-std::vector<graph::NodeType> retime_node_types();              // retime.hulls, retime.retime (nodes/retime)
+std::vector<graph::NodeType> retime_body_node_types();         // retime.body_model (nodes/retime)
+std::vector<graph::NodeType> retime_node_types();              // retime.dynamics, retime.hulls, retime.retime
 std::vector<graph::NodeType> retime_contact_node_types();      // retime.contacts (nodes/retime)
 
 // Every built-in node type (the lists above, in that order).

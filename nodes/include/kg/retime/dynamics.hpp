@@ -1,0 +1,154 @@
+// Inverse dynamics of a body model (body_model.hpp) along a clip, and the generalised forces of a
+// clip's path as functions of its retiming (McCann et al. 2006 §3.1, eq. 1-6): the "Force" step
+// of the paper's fig. 12, run once per frame before any retiming.
+//
+// Generalised coordinates are the skeleton's channels (skeleton.hpp), each a one-degree-of-freedom
+// joint; τ has one entry per channel, newtons for position channels and newton metres for
+// rotation ones. τ is what the figure's joints must apply, plus for the root channels the
+// residual the environment must supply: the world force along each root position channel's axis
+// and the moment about the root joint's origin around each root rotation channel's axis. External
+// forces (ExternalForce: contacts, pushes) act on the figure and are subtracted: τ = M q̈ + C + G − Jᵀ f.
+// Gravity is a world vector (m/s², +Y up: (0, −9.81, 0) on Earth).
+//
+//   DynamicsWorkspace ws;                                      // caller-owned, reused
+//   Eigen::VectorXd tau(channels);
+//   inverse_dynamics(body, q, qd, qdd, body.gravity, {}, ws, tau);
+//   PathDerivatives d = path_derivatives(clip);
+//   FrameTorques ft = frame_torques(body, clip, d, f, ws);    // τ(ṗ², p̈, g) at frame f
+//   Eigen::VectorXd t = ft.at(pdot * pdot, pddot, body.gravity);
+//   MassScaleTorques heavy = frame_torques_mass_scale(body, clip, d, f, femur, ws);
+//   Eigen::VectorXd t10 = heavy.at(10.0).at(1, 0, body.gravity);  // femur ten times heavier
+//   PathTorques all = path_torques(body, clip, d, femur);     // every frame, for the nodes
+//
+// Every function checks its inputs (check_body_model; sizes) and throws std::invalid_argument
+// naming what is wrong. Functions taking a DynamicsWorkspace allocate only when it is new or the
+// skeleton has grown; the per-frame work allocates nothing.
+#pragma once
+
+#include <array>
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/motion/kinematics.hpp"
+#include "kg/motion/motion.hpp"
+#include "kg/retime/body_model.hpp"
+#include "kg/retime/path.hpp"
+#include "kg/retime/path_torques.hpp"
+#include "kg/retime/polynomial.hpp"
+#include "kg/retime/rnea.hpp"
+
+namespace kg::retime {
+
+// The variables of the path polynomials (Monomial::variable indices).
+enum PathVariable : int {
+  kPdot = 0,      // ṗ: source seconds per output second
+  kPddot = 1,     // p̈: per output second
+  kGravityX = 2,  // gravity's world components, m/s²
+  kGravityY = 3,
+  kGravityZ = 4,
+  kMassScale = 5,  // k: one segment's mass and inertia multiplied by k
+};
+// Names of the variables above, for Monomial::to_string.
+inline constexpr std::array<const char*, 6> kPathVariableNames = {"pdot", "pddot", "gx", "gy", "gz", "k"};
+
+namespace path_terms {
+inline constexpr Monomial pdot = Monomial::variable(kPdot);
+inline constexpr Monomial pdot2 = Monomial::variable(kPdot, 2);
+inline constexpr Monomial pddot = Monomial::variable(kPddot);
+inline constexpr Monomial gx = Monomial::variable(kGravityX);
+inline constexpr Monomial gy = Monomial::variable(kGravityY);
+inline constexpr Monomial gz = Monomial::variable(kGravityZ);
+inline constexpr Monomial k = Monomial::variable(kMassScale);
+}  // namespace path_terms
+
+// The scalar types of the path recursion: velocities are multiples of ṗ (q̇ = q' ṗ), channel
+// accelerations combine ṗ² and p̈ (q̈ = q'' ṗ² + q' p̈), gravity is linear in g, and accelerations
+// and forces are linear in ṗ², p̈ and g. With a mass scale, forces gain the same terms times k.
+using PathVelocity = Polynomial<SortedBasis<path_terms::pdot>>;
+using PathChannelAcceleration = Polynomial<SortedBasis<path_terms::pdot2, path_terms::pddot>>;
+using PathGravity = Polynomial<SortedBasis<path_terms::gx, path_terms::gy, path_terms::gz>>;
+using PathAcceleration = Polynomial<UnionBasis<PathChannelAcceleration::BasisType, PathGravity::BasisType>>;
+using PathMassScale = Polynomial<SortedBasis<path_terms::k>>;
+using PathMassForce =
+    Polynomial<UnionBasis<PathAcceleration::BasisType,
+                          ProductBasis<PathMassScale::BasisType, PathAcceleration::BasisType>>>;
+
+// Buffers of every function below, sized for one skeleton at a time (reusable across skeletons;
+// it regrows). Its contents are scratch: nothing in it is meaningful between calls.
+struct DynamicsWorkspace {
+  DynamicsTopology topology;
+  FrameKinematics kinematics;
+  RneaBuffers<double, double, double> numeric;
+  RneaBuffers<PathVelocity, PathAcceleration, PathAcceleration> path;
+  RneaBuffers<PathVelocity, PathAcceleration, PathMassForce> path_mass;
+  std::vector<Spatial<double>> external;  // per joint
+  std::vector<SpatialInertia> composite;  // per joint
+};
+
+// Throws std::invalid_argument unless body has a skeleton, one segment per joint, finite non-negative
+// masses, finite centres of mass and finite symmetric inertias. `who` starts the message.
+void check_body_model(const BodyModel& body, const char* who);
+
+// A force the environment applies to one segment.
+struct ExternalForce {
+  int joint = -1;                                    // the segment it acts on (joint index)
+  Eigen::Vector3d point = Eigen::Vector3d::Zero();   // where it acts: world, metres
+  Eigen::Vector3d force = Eigen::Vector3d::Zero();   // world, newtons
+  Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // an additional pure couple: world, newton metres
+};
+
+// τ (channel_count) that moves the figure through q (frame values: metres, radians), q̇ and q̈
+// (channel_count each, per second and per second²) under `gravity` (world, m/s²) with `external`
+// forces acting on it.
+void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
+                      const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
+                      DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau);
+// The same, allocating its result.
+Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+                                 motion::FrameRef qdd, const Eigen::Vector3d& gravity,
+                                 std::span<const ExternalForce> external = {});
+
+// The joint-space mass matrix M(q) (channel_count x channel_count, symmetric) by the composite
+// rigid body algorithm, independently of the recursion above.
+void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
+                 Eigen::Ref<Eigen::MatrixXd> M);
+// C(q, q̇) q̇ + G(q): τ at zero acceleration and no external force (channel_count).
+void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+                 const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias);
+
+// τ(ṗ², p̈, g) at source frame `frame` of `clip` (whose skeleton has body's channels), with q', q''
+// from `d` = path_derivatives(clip): velocity = M q'' + C(q, q') q', acceleration = M q', gravity =
+// ∂τ/∂g (path_torques.hpp). `out`'s storage is reused (no allocation once sized).
+void frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+                   DynamicsWorkspace& ws, FrameTorques& out);
+FrameTorques frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                           int frame, DynamicsWorkspace& ws);
+
+// τ when one segment's mass and inertia are multiplied by k: τ(k) = base + (k − 1) change, exactly
+// (τ is affine in k). base is frame_torques' answer; change is the scaled segment's own
+// contribution (zero on channels that do not carry it: those of other branches).
+struct MassScaleTorques {
+  FrameTorques base;    // at k = 1
+  FrameTorques change;  // ∂τ/∂k
+  FrameTorques at(double k) const {
+    return {base.velocity + (k - 1) * change.velocity, base.acceleration + (k - 1) * change.acceleration,
+            base.gravity + (k - 1) * change.gravity};
+  }
+};
+// `joint`: the segment scaled (0..joint_count-1).
+void frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                              int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out);
+MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip,
+                                          const PathDerivatives& d, int frame, int joint,
+                                          DynamicsWorkspace& ws);
+
+// The whole clip, for the nodes: frame_torques of every frame of `clip` (with d =
+// path_derivatives(clip)) in frames; with `segment` >= 0 (a joint index) also that segment's name
+// and, per frame, the change of τ per unit of its mass scale (frame_torques_mass_scale's change).
+// skeleton and fps are the clip's.
+PathTorques path_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                         int segment = -1);
+
+}  // namespace kg::retime

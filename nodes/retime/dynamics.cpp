@@ -1,0 +1,423 @@
+#include "kg/retime/dynamics.hpp"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace kg::retime {
+
+namespace {
+
+// M <- M * R_axis(angle), touching only the two columns the rotation mixes (as kinematics.cpp).
+inline void post_rotate(Eigen::Matrix3d& M, int axis, double c, double s) {
+  const int l = axis == 2 ? 0 : axis + 1;
+  const int m = axis == 0 ? 2 : axis - 1;
+  const Eigen::Vector3d cl = M.col(l);
+  const Eigen::Vector3d cm = M.col(m);
+  M.col(l) = c * cl + s * cm;
+  M.col(m) = c * cm - s * cl;
+}
+
+inline bool is_identity(const Eigen::Matrix3d& A) {
+  return A(0, 0) == 1 && A(1, 1) == 1 && A(2, 2) == 1 && A(0, 1) == 0 && A(0, 2) == 0 && A(1, 0) == 0 &&
+         A(1, 2) == 0 && A(2, 0) == 0 && A(2, 1) == 0;
+}
+
+std::string str(int i) {
+  return std::to_string(i);
+}
+
+void check_frame_size(const BodyModel& body, Eigen::Index size, const char* who, const char* what) {
+  if (size != body.skeleton->channel_count())
+    throw std::invalid_argument(std::string(who) + ": " + what + " has " + std::to_string(size) +
+                                " values, the body's skeleton has " + str(body.skeleton->channel_count()) +
+                                " channels");
+}
+
+// Topology and buffers for body's skeleton (no allocation when they already fit).
+void prepare(const BodyModel& body, DynamicsWorkspace& ws) {
+  DynamicsTopology::build(*body.skeleton, ws.topology);
+  ws.kinematics.resize(body.skeleton->joint_count(), body.skeleton->channel_count());
+}
+
+void check_clip(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+                const char* who) {
+  check_body_model(body, who);
+  if (!clip.skeleton)
+    throw std::invalid_argument(std::string(who) + ": clip '" + clip.name + "' has no skeleton");
+  const motion::Skeleton& s = *body.skeleton;
+  if (clip.skeleton->joint_count() != s.joint_count() || clip.skeleton->channel_count() != s.channel_count())
+    throw std::invalid_argument(std::string(who) + ": clip '" + clip.name + "' has " +
+                                str(clip.skeleton->joint_count()) + " joints and " +
+                                str(clip.skeleton->channel_count()) + " channels, the body model " +
+                                str(s.joint_count()) + " and " + str(s.channel_count()));
+  if (clip.values.cols() != s.channel_count())
+    throw std::invalid_argument(std::string(who) + ": clip '" + clip.name + "' has " +
+                                std::to_string(clip.values.cols()) + " values per frame, expected " +
+                                str(s.channel_count()));
+  const auto frames = clip.values.rows();
+  if (d.first.rows() != frames || d.first.cols() != s.channel_count() || d.second.rows() != frames ||
+      d.second.cols() != s.channel_count())
+    throw std::invalid_argument(
+        std::string(who) + ": path derivatives are " + std::to_string(d.first.rows()) + " x " +
+        std::to_string(d.first.cols()) + " and " + std::to_string(d.second.rows()) + " x " +
+        std::to_string(d.second.cols()) + ", clip '" + clip.name + "' is " + std::to_string(frames) + " x " +
+        str(s.channel_count()) + " (expected path_derivatives(clip))");
+  if (frame < 0 || frame >= frames)
+    throw std::invalid_argument(std::string(who) + ": frame " + str(frame) + " out of range (clip '" +
+                                clip.name + "' has " + std::to_string(frames) + " frames)");
+}
+
+void resize(FrameTorques& t, int channels) {
+  t.velocity.resize(channels);
+  t.acceleration.resize(channels);
+  t.gravity.resize(channels, 3);
+}
+
+const Vec3<PathGravity> kPathGravity{PathGravity::term<path_terms::gx>(1.0),
+                                     PathGravity::term<path_terms::gy>(1.0),
+                                     PathGravity::term<path_terms::gz>(1.0)};
+
+// The path recursion for one frame: q̇ = q' ṗ, q̈ = q'' ṗ² + q' p̈, symbolic gravity.
+template <class F, class K, class Tau>
+void path_pass(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+               int scaled_joint, const K& scale, DynamicsWorkspace& ws,
+               RneaBuffers<PathVelocity, PathAcceleration, F>& buf, Tau&& tau) {
+  prepare(body, ws);
+  compute_frame_kinematics(body, clip.values.row(frame), ws.kinematics);
+  const double* q1 = d.first.row(frame).data();
+  const double* q2 = d.second.row(frame).data();
+  rnea_pass(
+      ws.topology, ws.kinematics, [&](int c) { return PathVelocity::term<path_terms::pdot>(q1[c]); },
+      [&](int c) {
+        PathChannelAcceleration a = PathChannelAcceleration::term<path_terms::pdot2>(q2[c]);
+        a += PathChannelAcceleration::term<path_terms::pddot>(q1[c]);
+        return a;
+      },
+      kPathGravity, scaled_joint, scale, {}, buf, tau);
+}
+
+}  // namespace
+
+void DynamicsTopology::build(const motion::Skeleton& skeleton, DynamicsTopology& out) {
+  const int joints = skeleton.joint_count();
+  out.joints.resize(static_cast<std::size_t>(joints));
+  out.order.clear();
+  out.order.reserve(static_cast<std::size_t>(skeleton.channel_count()));
+  for (int j = 0; j < joints; ++j) {
+    const motion::Joint& jt = skeleton.joint(j);
+    JointInfo& info = out.joints[static_cast<std::size_t>(j)];
+    info.parent = jt.parent;
+    info.begin = static_cast<int>(out.order.size());
+    const int n = static_cast<int>(jt.channels.size());
+    for (int pass = 0; pass < 2; ++pass)
+      for (int i = 0; i < n; ++i)
+        if (motion::is_rotation(jt.channels[static_cast<std::size_t>(i)].kind) == (pass == 1))
+          out.order.push_back(jt.first_channel + i);
+    info.end = static_cast<int>(out.order.size());
+  }
+  out.channel_count = skeleton.channel_count();
+}
+
+void check_body_model(const BodyModel& body, const char* who) {
+  if (!body.skeleton) throw std::invalid_argument(std::string(who) + ": the body model has no skeleton");
+  const motion::Skeleton& s = *body.skeleton;
+  if (body.segments.size() != static_cast<std::size_t>(s.joint_count()))
+    throw std::invalid_argument(std::string(who) + ": the body model has " +
+                                std::to_string(body.segments.size()) + " segments for " +
+                                str(s.joint_count()) + " joints (expected one per joint)");
+  // Called on every frame: the message is built only on failure.
+  for (int j = 0; j < s.joint_count(); ++j) {
+    const SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
+    const char* problem = nullptr;
+    const Eigen::Matrix3d& I = seg.inertia;
+    if (!std::isfinite(seg.mass) || seg.mass < 0)
+      problem = "mass is negative or not finite";
+    else if (!seg.com.allFinite())
+      problem = "centre of mass is not finite";
+    else if (!I.allFinite())
+      problem = "inertia is not finite";
+    else if (std::abs(I(0, 1) - I(1, 0)) + std::abs(I(0, 2) - I(2, 0)) + std::abs(I(1, 2) - I(2, 1)) >
+             1e-9 * std::max(1.0, I.cwiseAbs().maxCoeff()))
+      problem = "inertia is not symmetric";
+    if (problem)
+      throw std::invalid_argument(std::string(who) + ": segment '" + s.joint(j).name + "': " + problem +
+                                  " (mass " + std::to_string(seg.mass) + " kg)");
+  }
+}
+
+void compute_frame_kinematics(const BodyModel& body, motion::FrameRef q, FrameKinematics& out) {
+  const motion::Skeleton& s = *body.skeleton;
+  const int joints = s.joint_count();
+  if (out.inertia.size() != static_cast<std::size_t>(joints) ||
+      out.axis.size() != static_cast<std::size_t>(s.channel_count()))
+    out.resize(joints, s.channel_count());
+  const double* values = q.data();
+  for (int j = 0; j < joints; ++j) {
+    const motion::Joint& jt = s.joint(j);
+    const auto uj = static_cast<std::size_t>(j);
+    Eigen::Matrix3d Rp;
+    Eigen::Vector3d pp;
+    if (jt.parent < 0) {
+      Rp = s.file_to_world;
+      pp.setZero();
+    } else {
+      const Eigen::Isometry3d& P = out.world[static_cast<std::size_t>(jt.parent)];
+      Rp = P.linear();
+      pp = P.translation();
+    }
+    Eigen::Vector3d t = jt.offset;
+    bool rotated = false;
+    for (std::size_t i = 0; i < jt.channels.size(); ++i) {
+      const motion::ChannelKind kind = jt.channels[i].kind;
+      if (motion::is_rotation(kind))
+        rotated = true;
+      else
+        t[motion::axis_index(kind)] = values[jt.first_channel + static_cast<int>(i)];
+    }
+    const Eigen::Vector3d p = Rp * t + pp;
+    if (j == 0) out.origin = p;
+    const Vec3<double> r = vec3(p - out.origin);
+    Eigen::Matrix3d R = Rp;
+    if (rotated) {
+      const bool plain = is_identity(jt.axis);
+      if (!plain) R = Rp * jt.axis;
+      for (std::size_t i = 0; i < jt.channels.size(); ++i) {
+        const motion::ChannelKind kind = jt.channels[i].kind;
+        if (!motion::is_rotation(kind)) continue;
+        const int a = motion::axis_index(kind);
+        const int c = jt.first_channel + static_cast<int>(i);
+        const Vec3<double> w = vec3(R.col(a));
+        out.axis[static_cast<std::size_t>(c)] = {w, cross(r, w)};
+        const double x = values[c];
+        post_rotate(R, a, std::cos(x), std::sin(x));
+      }
+      if (!plain) R = R * jt.axis.transpose();
+    }
+    for (std::size_t i = 0; i < jt.channels.size(); ++i) {
+      const motion::ChannelKind kind = jt.channels[i].kind;
+      if (!motion::is_rotation(kind))
+        out.axis[static_cast<std::size_t>(jt.first_channel) + i] = {{},
+                                                                    vec3(Rp.col(motion::axis_index(kind)))};
+    }
+    Eigen::Isometry3d& W = out.world[uj];
+    W.linear() = R;
+    W.translation() = p;
+    W.makeAffine();
+
+    const SegmentInertia& seg = body.segments[uj];
+    SpatialInertia& I = out.inertia[uj];
+    if (seg.mass == 0 && seg.inertia.isZero(0)) {
+      I = SpatialInertia{};
+      continue;
+    }
+    const Eigen::Vector3d c = R * seg.com + (p - out.origin);
+    const Eigen::Matrix3d Ic = R * seg.inertia * R.transpose();
+    const double m = seg.mass;
+    const double cc = c.squaredNorm();
+    I.m = m;
+    I.h = vec3(m * c);
+    I.xx = Ic(0, 0) + m * (cc - c.x() * c.x());
+    I.yy = Ic(1, 1) + m * (cc - c.y() * c.y());
+    I.zz = Ic(2, 2) + m * (cc - c.z() * c.z());
+    I.xy = 0.5 * (Ic(0, 1) + Ic(1, 0)) - m * c.x() * c.y();
+    I.xz = 0.5 * (Ic(0, 2) + Ic(2, 0)) - m * c.x() * c.z();
+    I.yz = 0.5 * (Ic(1, 2) + Ic(2, 1)) - m * c.y() * c.z();
+  }
+}
+
+void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
+                      const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
+                      DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau) {
+  constexpr const char* who = "inverse_dynamics";
+  check_body_model(body, who);
+  check_frame_size(body, q.size(), who, "q");
+  check_frame_size(body, qd.size(), who, "q velocity");
+  check_frame_size(body, qdd.size(), who, "q acceleration");
+  check_frame_size(body, tau.size(), who, "tau");
+  if (!gravity.allFinite()) throw std::invalid_argument("inverse_dynamics: gravity is not finite");
+  prepare(body, ws);
+  compute_frame_kinematics(body, q, ws.kinematics);
+  const int joints = body.skeleton->joint_count();
+  std::span<const Spatial<double>> ext;
+  if (!external.empty()) {
+    ws.external.assign(static_cast<std::size_t>(joints), Spatial<double>{});
+    for (std::size_t i = 0; i < external.size(); ++i) {
+      const ExternalForce& e = external[i];
+      if (e.joint < 0 || e.joint >= joints)
+        throw std::invalid_argument("inverse_dynamics: external force " + std::to_string(i) +
+                                    " acts on joint " + str(e.joint) + " (expected 0.." + str(joints - 1) +
+                                    ")");
+      if (!e.point.allFinite() || !e.force.allFinite() || !e.torque.allFinite())
+        throw std::invalid_argument("inverse_dynamics: external force " + std::to_string(i) +
+                                    " is not finite");
+      const Eigen::Vector3d r = e.point - ws.kinematics.origin;
+      Spatial<double>& f = ws.external[static_cast<std::size_t>(e.joint)];
+      f.ang += vec3(r.cross(e.force) + e.torque);
+      f.lin += vec3(e.force);
+    }
+    ext = ws.external;
+  }
+  const double* v = qd.data();
+  const double* a = qdd.data();
+  double* out = tau.data();
+  rnea_pass(
+      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [a](int c) { return a[c]; }, vec3(gravity), -1,
+      1.0, ext, ws.numeric, [out](int c, double t) { out[c] = t; });
+}
+
+Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+                                 motion::FrameRef qdd, const Eigen::Vector3d& gravity,
+                                 std::span<const ExternalForce> external) {
+  check_body_model(body, "inverse_dynamics");
+  DynamicsWorkspace ws;
+  Eigen::VectorXd tau(body.skeleton->channel_count());
+  inverse_dynamics(body, q, qd, qdd, gravity, external, ws, tau);
+  return tau;
+}
+
+void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
+                 Eigen::Ref<Eigen::MatrixXd> M) {
+  constexpr const char* who = "mass_matrix";
+  check_body_model(body, who);
+  check_frame_size(body, q.size(), who, "q");
+  const int n = body.skeleton->channel_count();
+  if (M.rows() != n || M.cols() != n)
+    throw std::invalid_argument("mass_matrix: M is " + std::to_string(M.rows()) + " x " +
+                                std::to_string(M.cols()) + ", expected " + str(n) + " x " + str(n));
+  prepare(body, ws);
+  compute_frame_kinematics(body, q, ws.kinematics);
+  const DynamicsTopology& topo = ws.topology;
+  const int joints = static_cast<int>(topo.joints.size());
+  ws.composite.assign(ws.kinematics.inertia.begin(), ws.kinematics.inertia.end());
+  for (int j = joints - 1; j >= 0; --j) {
+    const int parent = topo.joints[static_cast<std::size_t>(j)].parent;
+    if (parent >= 0)
+      ws.composite[static_cast<std::size_t>(parent)] += ws.composite[static_cast<std::size_t>(j)];
+  }
+  M.setZero();
+  const std::vector<Spatial<double>>& S = ws.kinematics.axis;
+  for (int j = 0; j < joints; ++j) {
+    const DynamicsTopology::JointInfo& jt = topo.joints[static_cast<std::size_t>(j)];
+    for (int k = jt.begin; k < jt.end; ++k) {
+      const int c = topo.order[static_cast<std::size_t>(k)];
+      // The force the subtree of j needs to accelerate along channel c alone (the bodies between a
+      // joint's channels are massless, so every channel of j sees the same composite inertia).
+      const Spatial<double> F = ws.composite[static_cast<std::size_t>(j)] * S[static_cast<std::size_t>(c)];
+      for (int a = j; a >= 0; a = topo.joints[static_cast<std::size_t>(a)].parent) {
+        const DynamicsTopology::JointInfo& at = topo.joints[static_cast<std::size_t>(a)];
+        for (int l = at.begin; l < at.end; ++l) {
+          const int e = topo.order[static_cast<std::size_t>(l)];
+          const double x = dot(S[static_cast<std::size_t>(e)], F);
+          M(c, e) = x;
+          M(e, c) = x;
+        }
+      }
+    }
+  }
+}
+
+void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+                 const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias) {
+  constexpr const char* who = "bias_forces";
+  check_body_model(body, who);
+  check_frame_size(body, q.size(), who, "q");
+  check_frame_size(body, qd.size(), who, "q velocity");
+  check_frame_size(body, bias.size(), who, "bias");
+  if (!gravity.allFinite()) throw std::invalid_argument("bias_forces: gravity is not finite");
+  prepare(body, ws);
+  compute_frame_kinematics(body, q, ws.kinematics);
+  const double* v = qd.data();
+  double* out = bias.data();
+  rnea_pass(
+      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [](int) { return 0.0; }, vec3(gravity), -1,
+      1.0, {}, ws.numeric, [out](int c, double t) { out[c] = t; });
+}
+
+void frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+                   DynamicsWorkspace& ws, FrameTorques& out) {
+  check_clip(body, clip, d, frame, "frame_torques");
+  resize(out, body.skeleton->channel_count());
+  using namespace path_terms;
+  path_pass(body, clip, d, frame, -1, 1.0, ws, ws.path, [&out](int c, const PathAcceleration& t) {
+    out.velocity[c] = t.coefficient<pdot2>();
+    out.acceleration[c] = t.coefficient<pddot>();
+    out.gravity(c, 0) = t.coefficient<gx>();
+    out.gravity(c, 1) = t.coefficient<gy>();
+    out.gravity(c, 2) = t.coefficient<gz>();
+  });
+}
+
+FrameTorques frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                           int frame, DynamicsWorkspace& ws) {
+  FrameTorques out;
+  frame_torques(body, clip, d, frame, ws, out);
+  return out;
+}
+
+void frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                              int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out) {
+  check_clip(body, clip, d, frame, "frame_torques_mass_scale");
+  if (joint < 0 || joint >= body.skeleton->joint_count())
+    throw std::invalid_argument("frame_torques_mass_scale: joint " + str(joint) +
+                                " out of range (expected 0.." + str(body.skeleton->joint_count() - 1) + ")");
+  const int n = body.skeleton->channel_count();
+  resize(out.base, n);
+  resize(out.change, n);
+  using namespace path_terms;
+  path_pass(body, clip, d, frame, joint, PathMassScale::term<k>(1.0), ws, ws.path_mass,
+            [&out](int c, const PathMassForce& t) {
+              const double kv = t.coefficient<k * pdot2>(), ka = t.coefficient<k * pddot>();
+              const double kx = t.coefficient<k * gx>(), ky = t.coefficient<k * gy>(),
+                           kz = t.coefficient<k * gz>();
+              out.change.velocity[c] = kv;
+              out.change.acceleration[c] = ka;
+              out.change.gravity(c, 0) = kx;
+              out.change.gravity(c, 1) = ky;
+              out.change.gravity(c, 2) = kz;
+              out.base.velocity[c] = t.coefficient<pdot2>() + kv;
+              out.base.acceleration[c] = t.coefficient<pddot>() + ka;
+              out.base.gravity(c, 0) = t.coefficient<gx>() + kx;
+              out.base.gravity(c, 1) = t.coefficient<gy>() + ky;
+              out.base.gravity(c, 2) = t.coefficient<gz>() + kz;
+            });
+}
+
+MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip,
+                                          const PathDerivatives& d, int frame, int joint,
+                                          DynamicsWorkspace& ws) {
+  MassScaleTorques out;
+  frame_torques_mass_scale(body, clip, d, frame, joint, ws, out);
+  return out;
+}
+
+PathTorques path_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                         int segment) {
+  check_body_model(body, "path_torques");
+  if (segment < -1 || segment >= body.skeleton->joint_count())
+    throw std::invalid_argument("path_torques: segment " + str(segment) +
+                                " out of range (expected -1 for none or 0.." +
+                                str(body.skeleton->joint_count() - 1) + ")");
+  PathTorques out;
+  out.skeleton = clip.skeleton;
+  out.fps = clip.fps;
+  const auto frames = static_cast<std::size_t>(clip.frame_count());
+  out.frames.resize(frames);
+  DynamicsWorkspace ws;
+  if (segment < 0) {
+    for (std::size_t f = 0; f < frames; ++f)
+      frame_torques(body, clip, d, static_cast<int>(f), ws, out.frames[f]);
+    return out;
+  }
+  out.segment = body.skeleton->joint(segment).name;
+  out.segment_change.resize(frames);
+  MassScaleTorques m;
+  for (std::size_t f = 0; f < frames; ++f) {
+    frame_torques_mass_scale(body, clip, d, static_cast<int>(f), segment, ws, m);
+    out.frames[f] = m.base;
+    out.segment_change[f] = m.change;
+  }
+  return out;
+}
+
+}  // namespace kg::retime
