@@ -562,7 +562,9 @@ FrameHull frame_hull(const BodyModel& body, const std::vector<bool>& root, const
     }
   make_rows(body, root, t, w.rows);
 
-  if (contact.points.empty()) {
+  // A floating base without contact flies: its root's rows pin the timing (ballistic). A fixed
+  // base (a root without channels) has no such rows and keeps the LP: its torque limits alone.
+  if (contact.points.empty() && w.rows.root_count > 0) {
     h.status = HullStatus::Flight;
     least_squares_hull(body, t, w.rows, h.N, true, o, h);
     build_fan(h);

@@ -162,6 +162,29 @@ TEST_CASE("Torque limits cut the hull: a point mass on a force-limited leg", "[h
   }
 }
 
+TEST_CASE("A fixed base without contact: the torque limits alone make the hull", "[hulls]") {
+  // An arm turning about Z under a fixed root (no channels), τ = 2 ṗ² + p̈ + (0, 1, 0)·g within
+  // ±10 N m: the strip −0.19 <= p̈ + 2 ṗ² <= 19.81 cut by the box.
+  using motion::ChannelKind;
+  auto sk = kg::test::skeleton_of(
+      {{.name = "base", .parent = -1}, {.name = "arm", .parent = 0, .channels = {{ChannelKind::Zrotation}}}});
+  BodyModel body = kg::test::body_of(sk, 0.5);
+  body.segments[1].mass = 1;
+  body.torque_min[0] = -10;
+  body.torque_max[0] = 10;
+  FrameTorques t;
+  t.velocity = Eigen::VectorXd::Constant(1, 2.0);
+  t.acceleration = Eigen::VectorXd::Constant(1, 1.0);
+  t.gravity = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(1, 3);
+  t.gravity(0, 1) = 1;
+  const FrameHull h = build_frame_hull(body, ContactFrame{}, t, {});
+  CHECK(h.status == HullStatus::Feasible);
+  CHECK(h.column_count() == 0);
+  check_vertices(h, {{-0.19, 0}, {19.81, 0}, {19.81 - 32, 16}, {-20, 16}, {-20, 19.81 / 2}}, 1e-6);
+  check_vertex_lambdas(body, t, h, 1e-6);
+  CHECK(h.centre_is_original);
+}
+
 TEST_CASE("A box on two corners: tipping, not friction, limits how fast it may slide", "[hulls]") {
   // A box of width w = 0.25 and height h = 1 (centre of mass at its middle) sliding along X with its
   // bottom corners on the floor: moments about the centre of mass need |F_x| <= (w / h) F_y, which
