@@ -1,12 +1,13 @@
-// The "Feasible" figure of McCann et al. 2006 fig. 12 (milliseconds per frame to find the feasible
-// region and set up the contact model) on a CMU walk, one thread: contact detection, every
-// frame's hull with GLPK (build_hulls), and the force model's queries.
+// Per frame detail behind the "Feasible" row of bench_retime (McCann et al. 2006 fig. 12: the
+// milliseconds per frame to find the feasible region and set up the contact model) on a CMU clip,
+// one thread: contact detection, every frame's hull with GLPK (build_hulls), the statuses, LP and
+// vertex counts, and the force model's queries.
 //
-// Until the inverse dynamics lands (branch dyn), the torque coefficients come from a stand-in
-// that is exact for its own body: point masses at the segments' midpoints (de Leva's male mass
-// fractions of 70 kg), τ = Σ m_i J_iᵀ (x_i'' ṗ² + x_i' p̈ − g), with x_i', x_i'' the points'
-// path derivatives by central differences of their paths smoothed by a Gaussian of --smooth
-// seconds (default 0.04). Torque limits: 0 on the root, ±limit elsewhere (default 300).
+// The body: build_body_model's de Leva male table at 70 kg, torque limits ±limit N m on every
+// actuated rotation channel (the root 0). The coefficients: path_torques (the inverse dynamics)
+// on the clip, its channels first smoothed by a Gaussian of --smooth seconds (default 0: none;
+// captured markers jitter by a millimetre or so, which second differences at 120 Hz turn into
+// metres per second², so the original timing falls outside most hulls unsmoothed).
 //
 //   bench_hulls [--clip path.amc --asf path.asf] [--limit N·m | --limit inf] [--smooth seconds]
 //               [--repeat n] [--frames]
@@ -22,10 +23,13 @@
 #include <vector>
 
 #include "kg/io/asf_amc.hpp"
-#include "kg/motion/kinematics.hpp"
+#include "kg/motion/rotations.hpp"
+#include "kg/retime/body_build.hpp"
 #include "kg/retime/contacts.hpp"
+#include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"
 #include "kg/retime/hulls.hpp"
+#include "kg/retime/path.hpp"
 
 using namespace kg;
 using namespace kg::retime;
@@ -37,100 +41,29 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// de Leva (1996) male mass fractions (% of body mass) by CMU ASF bone, split where a table segment
-// spans several bones.
-double mass_percent(const std::string& bone) {
-  const std::string b =
-      bone.size() > 1 && (bone[0] == 'l' || bone[0] == 'r') && bone != "lowerback" && bone != "lowerneck"
-          ? bone.substr(1)
-          : bone;
-  if (b == "lowerback" || b == "upperback" || b == "thorax") return 43.46 / 3;
-  if (b == "lowerneck" || b == "upperneck" || b == "head") return 6.94 / 3;
-  if (b == "humerus") return 2.71;
-  if (b == "radius") return 1.62;
-  if (b == "hand") return 0.61;
-  if (b == "femur") return 14.16;
-  if (b == "tibia") return 4.33;
-  if (b == "foot") return 1.37 * 0.8;
-  if (b == "toes") return 1.37 * 0.2;
-  return 0;
-}
-
-struct PointMass {
-  int joint;
-  Eigen::Vector3d local;
-  double mass;
-};
-
-std::vector<PointMass> point_masses(const motion::Skeleton& sk, double body_mass) {
-  std::vector<PointMass> out;
-  for (int j = 0; j < sk.joint_count(); ++j) {
-    const double m = mass_percent(sk.joint(j).name) / 100 * body_mass;
-    if (m <= 0) continue;
-    Eigen::Vector3d tip = Eigen::Vector3d::Zero();
-    for (int c = 0; c < sk.joint_count(); ++c)
-      if (sk.joint(c).parent == j) {
-        tip = sk.joint(c).offset;
-        break;
-      }
-    if (tip.isZero() && !sk.joint(j).end_sites.empty()) tip = sk.joint(j).end_sites.front();
-    out.push_back({j, 0.5 * tip, m});
-  }
-  return out;
-}
-
-// The stand-in inverse dynamics along the clip's path (see the header comment).
-std::vector<FrameTorques> point_mass_torques(const motion::Motion& m, const std::vector<PointMass>& masses,
-                                             double sigma_s) {
+// The clip with every channel smoothed by a Gaussian of sigma_s seconds (rotation channels
+// unwrapped first, so a turn through ±180 degrees is not averaged away).
+motion::Motion smoothed(const motion::Motion& m, double sigma_s) {
+  if (!(sigma_s > 0)) return m;
   const motion::Skeleton& sk = *m.skeleton;
-  const int frames = m.frame_count(), channels = sk.channel_count();
-  const double h = 1.0 / m.fps;
-  std::vector<std::vector<Eigen::Vector3d>> x(static_cast<std::size_t>(frames));
-  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
-  for (int f = 0; f < frames; ++f) {
-    motion::forward_kinematics(sk, m.values.row(f), world);
-    for (const PointMass& p : masses)
-      x[static_cast<std::size_t>(f)].push_back(world[static_cast<std::size_t>(p.joint)] * p.local);
+  motion::Motion out = m;
+  motion::FrameMatrix q = m.values;
+  for (int c = 0; c < sk.channel_count(); ++c) {
+    const auto [joint, index] = sk.channel_owner(c);
+    if (motion::is_rotation(sk.joint(joint).channels[static_cast<std::size_t>(index)].kind))
+      for (int f = 1; f < m.frame_count(); ++f) q(f, c) = motion::nearest_angle(q(f, c), q(f - 1, c));
   }
-  // Captured markers jitter by a millimetre or so, which second differences at 120 Hz turn into
-  // metres per second²: smooth the points' paths (Gaussian, sigma_s) before differencing.
-  if (sigma_s > 0) {
-    const double sigma = sigma_s * m.fps;
-    const int half = static_cast<int>(std::ceil(3 * sigma));
-    std::vector<std::vector<Eigen::Vector3d>> smooth = x;
-    for (int f = 0; f < frames; ++f)
-      for (std::size_t i = 0; i < masses.size(); ++i) {
-        Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-        double weight = 0;
-        for (int k = -half; k <= half; ++k) {
-          const int g = std::clamp(f + k, 0, frames - 1);
-          const double w = std::exp(-0.5 * k * k / (sigma * sigma));
-          sum += w * x[static_cast<std::size_t>(g)][i];
-          weight += w;
-        }
-        smooth[static_cast<std::size_t>(f)][i] = sum / weight;
-      }
-    x = std::move(smooth);
-  }
-  std::vector<FrameTorques> out(static_cast<std::size_t>(frames));
-  Eigen::Matrix<double, 3, Eigen::Dynamic> J(3, channels);
+  const double sigma = sigma_s * m.fps;
+  const int half = static_cast<int>(std::ceil(3 * sigma)), frames = m.frame_count();
   for (int f = 0; f < frames; ++f) {
-    const int a = std::clamp(f, 1, frames - 2);
-    motion::forward_kinematics(sk, m.values.row(f), world);
-    FrameTorques& t = out[static_cast<std::size_t>(f)];
-    t.velocity = Eigen::VectorXd::Zero(channels);
-    t.acceleration = Eigen::VectorXd::Zero(channels);
-    t.gravity = Eigen::Matrix<double, Eigen::Dynamic, 3>::Zero(channels, 3);
-    for (std::size_t i = 0; i < masses.size(); ++i) {
-      const auto& xm = x[static_cast<std::size_t>(a - 1)][i];
-      const auto& x0 = x[static_cast<std::size_t>(a)][i];
-      const auto& xp = x[static_cast<std::size_t>(a + 1)][i];
-      const Eigen::Vector3d d1 = (xp - xm) / (2 * h), d2 = (xp - 2 * x0 + xm) / (h * h);
-      motion::point_jacobian(sk, m.values.row(f), world, masses[i].joint, masses[i].local, J);
-      t.velocity.noalias() += masses[i].mass * J.transpose() * d2;
-      t.acceleration.noalias() += masses[i].mass * J.transpose() * d1;
-      t.gravity.noalias() -= masses[i].mass * J.transpose();
+    Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(sk.channel_count());
+    double weight = 0;
+    for (int k = -half; k <= half; ++k) {
+      const double w = std::exp(-0.5 * k * k / (sigma * sigma));
+      sum += w * q.row(std::clamp(f + k, 0, frames - 1));
+      weight += w;
     }
+    out.values.row(f) = sum / weight;
   }
   return out;
 }
@@ -143,7 +76,7 @@ int main(int argc, char** argv) {
   double limit = 300;
   int repeat = 5;
   bool per_frame = false;
-  double smooth_s = 0.04;
+  double smooth_s = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--clip" && i + 1 < argc)
@@ -173,26 +106,16 @@ int main(int argc, char** argv) {
   const motion::Skeleton& sk = *walk.skeleton;
   const int frames = walk.frame_count(), channels = sk.channel_count();
 
-  BodyModel body;
-  body.skeleton = walk.skeleton;
-  body.segments.resize(static_cast<std::size_t>(sk.joint_count()));
-  body.segment_class.resize(static_cast<std::size_t>(sk.joint_count()));
-  const std::vector<PointMass> masses = point_masses(sk, 70.0);
-  for (const PointMass& p : masses) {
-    body.segments[static_cast<std::size_t>(p.joint)].mass = p.mass;
-    body.segments[static_cast<std::size_t>(p.joint)].com = p.local;
-  }
-  body.torque_min = Eigen::VectorXd::Constant(channels, -limit);
-  body.torque_max = Eigen::VectorXd::Constant(channels, limit);
-  for (const motion::Joint& j : sk.joints())
-    if (j.parent < 0)
-      for (std::size_t c = 0; c < j.channels.size(); ++c)
-        body.torque_min[j.first_channel + static_cast<int>(c)] =
-            body.torque_max[j.first_channel + static_cast<int>(c)] = 0;
-
-  const std::vector<FrameTorques> torques = point_mass_torques(walk, masses, smooth_s);
-
+  retime::BodySpec spec;
+  spec.torque_limits = {{".*", {limit}, {}}};
+  const BodyModel body = retime::build_body_model(walk.skeleton, spec).body;
+  const motion::Motion clip = smoothed(walk, smooth_s);
   auto t0 = Clock::now();
+  const std::vector<FrameTorques> torques =
+      retime::path_torques(body, clip, retime::path_derivatives(clip)).frames;
+  const double force_ms = ms_since(t0) / frames;
+
+  t0 = Clock::now();
   Contacts contacts;
   for (int r = 0; r < repeat; ++r) contacts = detect_contacts(walk, {});
   const double contacts_ms = ms_since(t0) / repeat;
@@ -235,9 +158,8 @@ int main(int argc, char** argv) {
   std::sort(sorted.begin(), sorted.end());
 
   std::printf(
-      "clip %s: %d frames at %.0f fps, %d channels, %d rows per LP (torque limit %g), %.1f kg of point "
-      "masses, "
-      "paths smoothed %g s\n",
+      "clip %s: %d frames at %.0f fps, %d channels, %d rows per LP (torque limit %g N m), %.1f kg (de "
+      "Leva), channels smoothed %g s\n",
       walk.name.c_str(), frames, walk.fps, channels, rows, limit, body.total_mass(), smooth_s);
   std::printf("contacts: %zu patches, λ columns per frame mean %.1f, max %d\n", contacts.patches.size(),
               static_cast<double>(columns) / frames, max_columns);
@@ -249,6 +171,7 @@ int main(int argc, char** argv) {
       "LPs per frame: mean %.1f, max %d; vertices per feasible hull: mean %.1f; %d vertices on the box\n",
       static_cast<double>(lps) / frames, max_lps, feasible ? static_cast<double>(vertices) / feasible : 0.0,
       on_box);
+  std::printf("Force (path_torques, for reference): %.3f ms per frame\n", force_ms);
   std::printf("Contacts (detection, Jacobians): %.3f ms per frame\n", contacts_ms / frames);
   std::printf("Feasible (build_hulls, best of %d): %.3f ms per frame (%.1f ms for the clip)\n", repeat,
               best / frames, best);

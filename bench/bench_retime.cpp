@@ -7,8 +7,14 @@
 //   RNEA            our inverse_dynamics, the same numbers (dynamics.hpp);
 //   Force           frame_torques: every coefficient of τ(ṗ², p̈, g), the paper's "Force";
 //   Force (k)       frame_torques_mass_scale: the same and their change with one segment's mass;
-//   Force / KDL     the target: at most 4 (from back-to-back batches of the two).
-// Later steps (Feasible, Bake, Obj, NP-Obj, Naive) add rows to `rows` in main(): a row is a name
+//   Force / KDL     the target: at most 4 (from back-to-back batches of the two);
+//   Feasible        build_frame_hull: the hull of feasible timings (GLPK) and the force model's fan
+//                   of one frame (hulls.hpp, force_model.hpp), with the frame's coefficients from
+//                   frame_torques and its contacts already made (16_15: detect_contacts' two
+//                   feet, torque limits ±300 N m; the chains: fixed bases without contact, every
+//                   channel limited to 1.5 times its largest |τ| along the clip at the original
+//                   timing, the paper's limits "observed" in the motion).
+// Later steps (Bake, Obj, NP-Obj, Naive) add rows to `rows` in main(): a row is a name
 // and a function timing one case. Times are the median over batches of the mean time per frame,
 // each batch running the whole clip as often as needed to last 20 ms.
 //
@@ -33,7 +39,9 @@
 #endif
 
 #include "kg/io/asf_amc.hpp"
+#include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
+#include "kg/retime/hulls.hpp"
 #include "kg/retime/path.hpp"
 
 using namespace kg;
@@ -288,6 +296,48 @@ int main(int argc, char** argv) {
                     return seconds_per_frame(c.clip.frame_count(), [&](int f) {
                       retime::frame_torques_mass_scale(c.body, c.clip, c.d, f, c.heavy, ws, out);
                       g_sink = out.change.velocity[0];
+                    });
+                  }});
+
+  rows.push_back({"Feasible", [&g](Case& c) -> std::optional<double> {
+                    // The body with torque limits, the coefficients and contacts of every frame
+                    // (outside the timing).
+                    const motion::Skeleton& s = *c.clip.skeleton;
+                    const int frames = c.clip.frame_count(), channels = s.channel_count();
+                    retime::DynamicsWorkspace ws;
+                    std::vector<retime::FrameTorques> torques(static_cast<std::size_t>(frames));
+                    for (int f = 0; f < frames; ++f)
+                      retime::frame_torques(c.body, c.clip, c.d, f, ws, torques[static_cast<std::size_t>(f)]);
+                    BodyModel body = c.body;
+                    const bool floating = s.joint(0).channels.size() > 0;
+                    body.torque_min = Eigen::VectorXd::Constant(channels, -300.0);
+                    body.torque_max = Eigen::VectorXd::Constant(channels, 300.0);
+                    if (!floating)
+                      for (int ch = 0; ch < channels; ++ch) {
+                        double most = 1e-3;
+                        for (const retime::FrameTorques& t : torques)
+                          most = std::max(most, std::abs(t.at(1, 0, g)[ch]));
+                        body.torque_min[ch] = -1.5 * most;
+                        body.torque_max[ch] = 1.5 * most;
+                      }
+                    for (const motion::Joint& j : s.joints())
+                      if (j.parent < 0)
+                        for (std::size_t i = 0; i < j.channels.size(); ++i)
+                          body.torque_min[j.first_channel + static_cast<int>(i)] =
+                              body.torque_max[j.first_channel + static_cast<int>(i)] = 0;
+                    retime::Contacts contacts;
+                    if (floating) {
+                      contacts = retime::detect_contacts(c.clip, {});
+                    } else {
+                      contacts.skeleton = c.clip.skeleton;
+                      contacts.frames.resize(static_cast<std::size_t>(frames));
+                    }
+                    const retime::HullOptions options;
+                    return seconds_per_frame(frames, [&](int f) {
+                      const retime::FrameHull h =
+                          retime::build_frame_hull(body, contacts.frames[static_cast<std::size_t>(f)],
+                                                   torques[static_cast<std::size_t>(f)], options);
+                      g_sink = h.centre.y();
                     });
                   }});
 
