@@ -644,22 +644,22 @@ Eigen::Vector3d body_com(const BodyModel& body, motion::FrameRef frame) {
   return sum / mass;
 }
 
-void check_body_model(const BodyModel& body) {
-  if (!body.skeleton) throw std::invalid_argument("body model: no skeleton");
+void check_body_model(const BodyModel& body, const std::string& who) {
+  if (!body.skeleton) throw std::invalid_argument(who + ": no skeleton");
   const Skeleton& s = *body.skeleton;
   const auto n = static_cast<std::size_t>(s.joint_count());
   if (body.segments.size() != n || body.segment_class.size() != n)
-    throw std::invalid_argument("body model: " + std::to_string(body.segments.size()) + " segments and " +
+    throw std::invalid_argument(who + ": " + std::to_string(body.segments.size()) + " segments and " +
                                 std::to_string(body.segment_class.size()) + " classes for " +
                                 std::to_string(n) + " joints");
   const auto channels = static_cast<Eigen::Index>(s.channel_count());
   if (body.torque_min.size() != channels || body.torque_max.size() != channels)
-    throw std::invalid_argument("body model: torque bounds of " + std::to_string(body.torque_min.size()) +
+    throw std::invalid_argument(who + ": torque bounds of " + std::to_string(body.torque_min.size()) +
                                 " and " + std::to_string(body.torque_max.size()) + " values for " +
                                 std::to_string(channels) + " channels");
   for (std::size_t j = 0; j < n; ++j) {
     const SegmentInertia& seg = body.segments[j];
-    const std::string what = "body model: joint " + in_quotes(s.joint(static_cast<int>(j)).name);
+    const std::string what = who + ": joint " + in_quotes(s.joint(static_cast<int>(j)).name);
     if (!std::isfinite(seg.mass) || seg.mass < 0)
       throw std::invalid_argument(what + ": mass " + fmt(seg.mass));
     if (!seg.com.allFinite()) throw std::invalid_argument(what + ": centre of mass is not finite");
@@ -671,11 +671,11 @@ void check_body_model(const BodyModel& body) {
   for (Eigen::Index c = 0; c < channels; ++c)
     if (std::isnan(body.torque_min[c]) || std::isnan(body.torque_max[c]) ||
         body.torque_min[c] > body.torque_max[c])
-      throw std::invalid_argument("body model: channel " + s.channel_name(static_cast<int>(c)) + " bounds [" +
+      throw std::invalid_argument(who + ": channel " + s.channel_name(static_cast<int>(c)) + " bounds [" +
                                   fmt(body.torque_min[c]) + ", " + fmt(body.torque_max[c]) + "]");
   if (!std::isfinite(body.friction) || body.friction < 0)
-    throw std::invalid_argument("body model: friction " + fmt(body.friction));
-  if (!body.gravity.allFinite()) throw std::invalid_argument("body model: gravity is not finite");
+    throw std::invalid_argument(who + ": friction " + fmt(body.friction));
+  if (!body.gravity.allFinite()) throw std::invalid_argument(who + ": gravity is not finite");
 }
 
 }  // namespace kg::retime

@@ -1,5 +1,7 @@
 #include "kg/retime/dynamics.hpp"
 
+#include "kg/retime/body_build.hpp"
+
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -7,6 +9,8 @@
 namespace kg::retime {
 
 namespace {
+
+void check_dynamics_body(const BodyModel& body, const char* who);  // below
 
 // M <- M * R_axis(angle), touching only the two columns the rotation mixes (as kinematics.cpp).
 inline void post_rotate(Eigen::Matrix3d& M, int axis, double c, double s) {
@@ -42,7 +46,7 @@ void prepare(const BodyModel& body, DynamicsWorkspace& ws) {
 
 void check_clip(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
                 const char* who) {
-  check_body_model(body, who);
+  check_dynamics_body(body, who);
   if (!clip.skeleton)
     throw std::invalid_argument(std::string(who) + ": clip '" + clip.name + "' has no skeleton");
   const motion::Skeleton& s = *body.skeleton;
@@ -119,7 +123,12 @@ void DynamicsTopology::build(const motion::Skeleton& skeleton, DynamicsTopology&
   out.channel_count = skeleton.channel_count();
 }
 
-void check_body_model(const BodyModel& body, const char* who) {
+namespace {
+
+// The per-call guard of the recursions: what they need to index safely and give finite numbers.
+// Cheap enough for every frame; the whole model is checked once per clip by check_body_model
+// (body_build.hpp), whose positive-definiteness test would cost more than the recursion.
+void check_dynamics_body(const BodyModel& body, const char* who) {
   if (!body.skeleton) throw std::invalid_argument(std::string(who) + ": the body model has no skeleton");
   const motion::Skeleton& s = *body.skeleton;
   if (body.segments.size() != static_cast<std::size_t>(s.joint_count()))
@@ -145,6 +154,8 @@ void check_body_model(const BodyModel& body, const char* who) {
                                   " (mass " + std::to_string(seg.mass) + " kg)");
   }
 }
+
+}  // namespace
 
 void compute_frame_kinematics(const BodyModel& body, motion::FrameRef q, FrameKinematics& out) {
   const motion::Skeleton& s = *body.skeleton;
@@ -230,7 +241,7 @@ void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRe
                       const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
                       DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau) {
   constexpr const char* who = "inverse_dynamics";
-  check_body_model(body, who);
+  check_dynamics_body(body, who);
   check_frame_size(body, q.size(), who, "q");
   check_frame_size(body, qd.size(), who, "q velocity");
   check_frame_size(body, qdd.size(), who, "q acceleration");
@@ -269,7 +280,7 @@ void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRe
 Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                                  motion::FrameRef qdd, const Eigen::Vector3d& gravity,
                                  std::span<const ExternalForce> external) {
-  check_body_model(body, "inverse_dynamics");
+  check_dynamics_body(body, "inverse_dynamics");
   DynamicsWorkspace ws;
   Eigen::VectorXd tau(body.skeleton->channel_count());
   inverse_dynamics(body, q, qd, qdd, gravity, external, ws, tau);
@@ -279,7 +290,7 @@ Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, moti
 void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
                  Eigen::Ref<Eigen::MatrixXd> M) {
   constexpr const char* who = "mass_matrix";
-  check_body_model(body, who);
+  check_dynamics_body(body, who);
   check_frame_size(body, q.size(), who, "q");
   const int n = body.skeleton->channel_count();
   if (M.rows() != n || M.cols() != n)
@@ -320,7 +331,7 @@ void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& w
 void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                  const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias) {
   constexpr const char* who = "bias_forces";
-  check_body_model(body, who);
+  check_dynamics_body(body, who);
   check_frame_size(body, q.size(), who, "q");
   check_frame_size(body, qd.size(), who, "q velocity");
   check_frame_size(body, bias.size(), who, "bias");
@@ -394,6 +405,7 @@ MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::M
 PathTorques path_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                          int segment) {
   check_body_model(body, "path_torques");
+  check_dynamics_body(body, "path_torques");
   if (segment < -1 || segment >= body.skeleton->joint_count())
     throw std::invalid_argument("path_torques: segment " + str(segment) +
                                 " out of range (expected -1 for none or 0.." +

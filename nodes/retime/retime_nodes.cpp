@@ -1,4 +1,5 @@
-// retime.hulls and retime.retime: thin adapters over hulls.hpp, retime_clip.hpp and playback.hpp.
+// retime.dynamics, retime.hulls and retime.retime: thin adapters over dynamics.hpp, hulls.hpp,
+// retime_clip.hpp and playback.hpp.
 // A solve that misses its hulls is reported (figures, log), and fails the node only with `strict`.
 #include <chrono>
 #include <cmath>
@@ -9,6 +10,7 @@
 #include "kg/graph/atomic_file.hpp"
 #include "kg/graph/json.hpp"
 #include "kg/retime/contacts.hpp"
+#include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
 #include "kg/retime/playback.hpp"
 #include "kg/retime/retime_clip.hpp"
@@ -30,6 +32,54 @@ Eigen::Vector3d gravity_from(const std::vector<double>& values, const Eigen::Vec
   if (values.size() == 3) return Eigen::Vector3d(values[0], values[1], values[2]);
   throw std::invalid_argument("gravity: " + std::to_string(values.size()) +
                               " numbers (expected one magnitude, down, or a vector of three, m/s^2)");
+}
+
+class DynamicsNode final : public graph::Node {
+ public:
+  explicit DynamicsNode(const Params& p) : segment_(p.get<std::string>("segment")) {}
+
+  void run(RunContext& ctx) const override {
+    const motion::Motion& clip = ctx.input<motion::Motion>("motion");
+    const BodyModel& body = ctx.input<BodyModel>("body");
+    if (body.skeleton != clip.skeleton &&
+        (!body.skeleton || body.skeleton->channel_count() != clip.skeleton->channel_count()))
+      throw std::invalid_argument("the body model was built for another skeleton than the motion's");
+    int joint = -1;
+    if (!segment_.empty()) {
+      joint = clip.skeleton->find_joint(segment_);
+      if (joint < 0) throw std::invalid_argument("segment '" + segment_ + "': no such joint in the motion's skeleton");
+      if (body.segments[static_cast<std::size_t>(joint)].mass == 0)
+        throw std::invalid_argument("segment '" + segment_ + "' is massless in the body model: scaling its mass "
+                                    "changes nothing");
+    }
+    const auto start = std::chrono::steady_clock::now();
+    PathTorques torques = path_torques(body, clip, path_derivatives(clip), joint);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ctx.report("frames", static_cast<std::int64_t>(torques.frame_count()));
+    ctx.report("us_per_frame", torques.frame_count() ? 1e6 * seconds / torques.frame_count() : 0.0);
+    ctx.output("torques", std::move(torques));
+  }
+
+ private:
+  std::string segment_;
+};
+
+NodeType dynamics_node_type() {
+  NodeSpec spec{
+      .type = "retime.dynamics",
+      .version = 1,
+      .doc = "Inverse dynamics along the clip's path (McCann et al. 2006 §3.1, eq. 5 and 6): per frame, the "
+             "generalised forces as coefficients of ṗ², p̈ and the gravity vector, from Featherstone's "
+             "recursive Newton-Euler over a polynomial scalar; with `segment`, also their change with that "
+             "segment's mass, so retime.hulls can make it heavier without running this again.",
+      .inputs = {{"motion", "kg.Motion", true, "the clip (metres, radians)"},
+                 {"body", "kg.BodyModel", true, "its masses and inertias (retime.body_model)"}},
+      .outputs = {{"torques", "kg.PathTorques", true, "per frame: coefficients of ṗ², p̈ and g (N, N m)"}},
+      .params = {{.name = "segment",
+                  .type = ParamType::String,
+                  .default_value = std::string(),
+                  .doc = "a joint whose mass retime.hulls may scale (e.g. lfemur); \"\" for none"}}};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<DynamicsNode>(p); }};
 }
 
 class HullsNode final : public graph::Node {
@@ -346,6 +396,7 @@ namespace kg {
 
 std::vector<graph::NodeType> retime_node_types() {
   std::vector<graph::NodeType> out;
+  out.push_back(retime::dynamics_node_type());
   out.push_back(retime::hulls_node_type());
   out.push_back(retime::retime_node_type());
   return out;

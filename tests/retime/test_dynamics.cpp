@@ -23,6 +23,8 @@
 #include <Eigen/Eigenvalues>
 #include <catch2/catch.hpp>
 
+#include <Eigen/QR>
+
 #ifdef KG_HAVE_KDL
 #include <kdl/chainidsolver_recursive_newton_euler.hpp>
 #include <kdl/treeidsolver_recursive_newton_euler.hpp>
@@ -115,6 +117,17 @@ std::shared_ptr<motion::Skeleton> random_skeleton(std::mt19937& rng, const Shape
   return s;
 }
 
+// What a whole BodyModel carries besides the inertias (check_body_model asks for it): a class
+// per joint, unlimited torques. The dynamics read neither.
+void complete(BodyModel& b) {
+  b.segment_class.assign(b.segments.size(), "");
+  for (std::size_t j = 0; j < b.segments.size(); ++j)
+    if (b.segments[j].mass > 0) b.segment_class[j] = "random";
+  const int channels = b.skeleton->channel_count();
+  b.torque_min = Eigen::VectorXd::Constant(channels, -std::numeric_limits<double>::infinity());
+  b.torque_max = Eigen::VectorXd::Constant(channels, std::numeric_limits<double>::infinity());
+}
+
 // Random masses (a fifth of the segments massless), centres of mass and inertias.
 BodyModel random_body(std::shared_ptr<const motion::Skeleton> s, std::mt19937& rng) {
   BodyModel b;
@@ -124,10 +137,15 @@ BodyModel random_body(std::shared_ptr<const motion::Skeleton> s, std::mt19937& r
     if (rng() % 5 == 0) continue;
     seg.mass = uniform(rng, 0.5, 8);
     seg.com = random_vector(rng, 0.3);
+    // A rigid body's: principal moments from second moments x, y, z of its mass (each moment at
+    // most the sum of the other two), in random axes.
     Eigen::Matrix3d A;
-    for (int i = 0; i < 9; ++i) A(i / 3, i % 3) = uniform(rng, -0.4, 0.4);
-    seg.inertia = A * A.transpose() + 0.01 * Eigen::Matrix3d::Identity();
+    for (int i = 0; i < 9; ++i) A(i / 3, i % 3) = uniform(rng, -1, 1);
+    const Eigen::Matrix3d R = Eigen::HouseholderQR<Eigen::Matrix3d>(A).householderQ();
+    const double x = uniform(rng, 0.005, 0.2), y = uniform(rng, 0.005, 0.2), z = uniform(rng, 0.005, 0.2);
+    seg.inertia = R * Eigen::Vector3d(y + z, x + z, x + y).asDiagonal() * R.transpose();
   }
+  complete(b);
   return b;
 }
 
@@ -144,7 +162,7 @@ Eigen::VectorXd random_values(const motion::Skeleton& s, std::mt19937& rng, doub
 }
 
 double inf_norm(const Eigen::VectorXd& v) {
-  return v.cwiseAbs().maxCoeff();
+  return v.size() ? v.cwiseAbs().maxCoeff() : 0.0;  // a chain may draw no channel at all
 }
 
 // |a - b| <= tol * max(1, |b|_inf) entrywise.
@@ -186,6 +204,7 @@ motion::Motion projectile(BodyModel& body, const Eigen::Vector3d& g, double fps,
       {.mass = 30, .com = Eigen::Vector3d::Zero(), .inertia = Eigen::Vector3d(2.0, 1.5, 1.0).asDiagonal()},
       {.mass = 4, .com = Eigen::Vector3d::Zero(), .inertia = Eigen::Vector3d(0.1, 0.3, 0.3).asDiagonal()},
       {.mass = 4, .com = Eigen::Vector3d::Zero(), .inertia = Eigen::Vector3d(0.1, 0.3, 0.3).asDiagonal()}};
+  complete(body);
   motion::Motion m{s, motion::FrameMatrix::Zero(frames, s->channel_count()), fps, "projectile"};
   const Eigen::Vector3d p0(0.3, 1.2, -0.4), v0(1.5, 4.0, 0.7);
   for (int f = 0; f < frames; ++f) {

@@ -202,7 +202,7 @@ void check_segment_inertia(const Eigen::Matrix3d& I, const std::string& what);
 // Throws std::invalid_argument naming the first problem: no skeleton, sizes other than one
 // segment and class per joint and one bound per channel, a non-finite or negative number, an
 // inertia of a massive segment not symmetric positive definite, torque_min > torque_max.
-void check_body_model(const BodyModel& body);
+void check_body_model(const BodyModel& body, const std::string& who = "body model");
 
 // What a body file gave: `spec` is the base with the file's keys applied; `given` the top-level
 // keys the file set (version excluded), in file order.

@@ -20,8 +20,8 @@
 //   Eigen::VectorXd t10 = heavy.at(10.0).at(1, 0, body.gravity);  // femur ten times heavier
 //   PathTorques all = path_torques(body, clip, d, femur);     // every frame, for the nodes
 //
-// Every function checks its inputs (check_body_model; sizes) and throws std::invalid_argument
-// naming what is wrong. Functions taking a DynamicsWorkspace allocate only when it is new or the
+// Every function checks its inputs (the body cheaply per call, and whole once per clip with
+// check_body_model; sizes) and throws std::invalid_argument naming what is wrong. Functions taking a DynamicsWorkspace allocate only when it is new or the
 // skeleton has grown; the per-frame work allocates nothing.
 #pragma once
 
@@ -86,10 +86,6 @@ struct DynamicsWorkspace {
   std::vector<Spatial<double>> external;  // per joint
   std::vector<SpatialInertia> composite;  // per joint
 };
-
-// Throws std::invalid_argument unless body has a skeleton, one segment per joint, finite non-negative
-// masses, finite centres of mass and finite symmetric inertias. `who` starts the message.
-void check_body_model(const BodyModel& body, const char* who);
 
 // A force the environment applies to one segment.
 struct ExternalForce {
