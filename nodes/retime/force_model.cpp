@@ -74,13 +74,18 @@ void build_fan(FrameHull& h) {
     s.to = b.dir;
     s.edge = edge;
     s.in_hull = in_hull;
-    Eigen::Matrix2d basis;
-    basis << a.dir, b.dir;
-    const Eigen::Matrix2d inverse = basis.inverse();  // (α, β) = inverse * (x − c)
-    Eigen::MatrixXd delta(k, 2);
-    delta.col(0) = (a.lambda ? *a.lambda : h.centre_lambda) - h.centre_lambda;
-    delta.col(1) = (b.lambda ? *b.lambda : h.centre_lambda) - h.centre_lambda;
-    const Eigen::MatrixXd slope = delta * inverse;  // k x 2: dλ/dp̈, dλ/dṗ²
+    Eigen::MatrixXd slope = Eigen::MatrixXd::Zero(k, 2);  // k x 2: dλ/dp̈, dλ/dṗ²
+    // Between two normals λ is the centre's: no slope (and the half-turn wedge of a one-ray fan
+    // has no basis to invert).
+    if (a.lambda || b.lambda) {
+      Eigen::Matrix2d basis;
+      basis << a.dir, b.dir;
+      const Eigen::Matrix2d inverse = basis.inverse();  // (α, β) = inverse * (x − c)
+      Eigen::MatrixXd delta(k, 2);
+      delta.col(0) = (a.lambda ? *a.lambda : h.centre_lambda) - h.centre_lambda;
+      delta.col(1) = (b.lambda ? *b.lambda : h.centre_lambda) - h.centre_lambda;
+      slope = delta * inverse;
+    }
     s.lambda_pddot = slope.col(0);
     s.lambda_pdot2 = slope.col(1);
     s.lambda0 = h.centre_lambda - slope * c;

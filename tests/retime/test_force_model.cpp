@@ -211,6 +211,32 @@ TEST_CASE("A one-point hull has one λ everywhere", "[force_model]") {
   }
 }
 
+TEST_CASE("A segment hull with the centre at one end: finite λ everywhere", "[force_model]") {
+  // The fan has one ray (to the far end), its two normals and the half-turn between them.
+  FrameHull h;
+  h.vertices = {{0.3, 1.3}, {1.4, 0.0}};
+  h.lambda = {Eigen::Vector2d(1, 2), Eigen::Vector2d(5, 0)};
+  h.centre = h.vertices[0];
+  h.centre_lambda = Eigen::Vector2d(1, 3);
+  build_fan(h);
+  REQUIRE(h.sectors.size() == 3);
+  std::mt19937 rng(17);
+  int hint = 0;
+  Eigen::VectorXd lambda;
+  for (int i = 0; i < 200; ++i) {
+    const Eigen::Vector2d x = anywhere(rng);
+    lambda_at(h, x, hint, lambda);
+    REQUIRE(lambda.allFinite());
+    // λ varies along the segment only: it is the centre's on the far side of the centre.
+    const Eigen::Vector2d e = h.vertices[1] - h.vertices[0];
+    if ((x - h.centre).dot(e) <= 0) CHECK((lambda - h.centre_lambda).norm() < 1e-9);
+  }
+  lambda_at(h, h.vertices[1], hint, lambda);
+  CHECK((lambda - h.lambda[1]).norm() < 1e-9);
+  lambda_at(h, 0.5 * (h.vertices[0] + h.vertices[1]), hint, lambda);
+  CHECK((lambda - Eigen::Vector2d(3, 1.5)).norm() < 1e-9);
+}
+
 TEST_CASE("τ is affine per sector and equals the rows at λ(p̈, ṗ²)", "[force_model]") {
   std::mt19937 rng(5);
   for (const Case& c : cases()) {
