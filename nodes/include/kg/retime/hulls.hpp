@@ -34,7 +34,7 @@
 //     box minimising the squared residual of the root's rows (a two-unknown bounded least
 //     squares; a ballistic frame gives exactly (0, 1)). A fixed base (no root channel) without
 //     contact keeps its LP: its torque limits alone bound the hull (Bobrow's robot arm);
-//   - Infeasible (contact, but no (p̈, ṗ², λ >= 0) meets every row: captured motion is not exactly
+//   - Infeasible (an empty polytope: no (p̈, ṗ², λ >= 0) meets every row; captured motion is not exactly
 //     physical, nor is a body model): the (p̈, ṗ², λ >= 0) in the box minimising the summed squared
 //     violation of every row (the root's equalities and the torque limits), by a bounded-variable
 //     least squares (Stark & Parker's BVLS, active set, each row's violation modelled by a slack
@@ -71,7 +71,7 @@ struct HullOptions {
 enum class HullStatus : std::uint8_t {
   Feasible,    // the polytope is not empty: vertices from LPs
   Flight,      // no contact, floating base: one least-squares point of the root's rows
-  Infeasible,  // contact but an empty polytope: one least-squares point of every row
+  Infeasible,  // an empty polytope (contact, or a fixed base): one least-squares point of every row
 };
 const char* to_string(HullStatus status);  // "feasible", "flight", "infeasible"
 
