@@ -53,8 +53,8 @@ double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::Vec
 }
 
 BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques,
-                               std::span<const Eigen::VectorXd> targets, double source_fps,
-                               const ObjectiveWeights& weights)
+                               std::span<const Eigen::VectorXd> targets, const motion::Skeleton& skeleton,
+                               double source_fps, const ObjectiveWeights& weights)
     : hulls_(hulls), fps_(source_fps), weights_(weights) {
   const std::size_t frames = hulls.frames.size();
   if (frames < 2) throw std::invalid_argument("retiming objective: fewer than 2 frames");
@@ -67,9 +67,30 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
     throw std::invalid_argument("retiming objective: alpha and beta must be >= 0 and the torque scale > 0");
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
   quadratics_.resize(frames);
+  flight_.assign(frames, Quadratic{});
+  std::vector<int> root_rows;
+  for (const motion::Joint& joint : skeleton.joints())
+    if (joint.parent < 0)
+      for (std::size_t c = 0; c < joint.channels.size(); ++c) root_rows.push_back(joint.first_channel + static_cast<int>(c));
   SectorTorques t;
   for (std::size_t f = 0; f < frames; ++f) {
     const FrameHull& hull = hulls.frames[f];
+    if (hull.status == HullStatus::Flight && !root_rows.empty()) {
+      const FrameTorques& ft = torques[f];
+      const auto n = static_cast<Eigen::Index>(root_rows.size());
+      Eigen::VectorXd r0(n), ra(n), rb(n);
+      for (Eigen::Index i = 0; i < n; ++i) {
+        const int c = root_rows[static_cast<std::size_t>(i)];
+        r0[i] = ft.gravity.row(c).dot(hulls.gravity);
+        ra[i] = ft.acceleration[c];
+        rb[i] = ft.velocity[c];
+      }
+      // The weight: what the root's rows need to hold the body still.
+      const double weight = std::max(r0.norm(), 1e-9);
+      Quadratic q = bake_quadratic(r0, ra, rb, Eigen::VectorXd::Zero(n), weights.alpha / (weight * weight));
+      q[5] -= kg::retime::evaluate(q, hull.vertices[0].x(), hull.vertices[0].y());  // 0 at the closest point
+      flight_[f] = q;
+    }
     quadratics_[f].reserve(hull.sectors.size());
     for (std::size_t s = 0; s < hull.sectors.size(); ++s) {
       sector_torques(hull, static_cast<int>(s), torques[f], hulls.gravity, t);
@@ -84,6 +105,13 @@ BakedObjective::FrameCost BakedObjective::frame_cost(int frame, double a, double
   hint = find_sector(hull, x, hint);
   const Quadratic& q = quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(hint)];
   FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4], 2 * q[0] * b + q[2] * a + q[3]};
+  if (hull.status == HullStatus::Flight) {
+    const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
+    cost.value += kg::retime::evaluate(r, a, b);
+    cost.d_a += 2 * r[1] * a + r[2] * b + r[4];
+    cost.d_b += 2 * r[0] * b + r[2] * a + r[3];
+    return cost;
+  }
   // Inside the sector's fan triangle is inside the hull: no nearest point to find.
   const FanSector& s = hull.sectors[static_cast<std::size_t>(hint)];
   const int n = static_cast<int>(hull.vertices.size());
@@ -126,7 +154,9 @@ BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot
   out.torque = kg::retime::evaluate(quadratic(frame, sector), pddot, pdot_squared);
   hint = sector;
   const HullPoint c = closest_point(hull, x, hint);
-  out.feasibility = weights_.alpha * c.distance_squared;
+  out.feasibility = hull.status == HullStatus::Flight
+                        ? kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
+                        : weights_.alpha * c.distance_squared;
   out.inside = c.distance_squared <= tolerance * tolerance;
   return out;
 }

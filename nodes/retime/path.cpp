@@ -1,11 +1,46 @@
 #include "kg/retime/path.hpp"
 
+#include <cmath>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
 #include "kg/motion/rotations.hpp"
 
 namespace kg::retime {
 
-PathDerivatives path_derivatives(const motion::Motion& motion) {
+namespace {
+
+// Each column convolved with a normalised Gaussian of `sigma` frames, the ends extended by odd
+// reflection (2 q[0] - q[k] before the start, likewise after the end).
+motion::FrameMatrix gaussian_smoothed(const motion::FrameMatrix& q, double sigma) {
+  const int frames = static_cast<int>(q.rows());
+  const int radius = static_cast<int>(std::ceil(4 * sigma));
+  std::vector<double> kernel(static_cast<std::size_t>(2 * radius + 1));
+  double sum = 0;
+  for (int k = -radius; k <= radius; ++k) sum += kernel[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * k * k / (sigma * sigma));
+  for (double& w : kernel) w /= sum;
+  auto at = [&](int f, Eigen::Index c) {
+    if (f < 0) return 2 * q(0, c) - q(std::min(-f, frames - 1), c);
+    if (f >= frames) return 2 * q(frames - 1, c) - q(std::max(2 * (frames - 1) - f, 0), c);
+    return q(f, c);
+  };
+  motion::FrameMatrix out(q.rows(), q.cols());
+  for (Eigen::Index c = 0; c < q.cols(); ++c)
+    for (int f = 0; f < frames; ++f) {
+      double v = 0;
+      for (int k = -radius; k <= radius; ++k) v += kernel[static_cast<std::size_t>(k + radius)] * at(f + k, c);
+      out(f, c) = v;
+    }
+  return out;
+}
+
+}  // namespace
+
+PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing) {
   motion.check();
+  if (!(smoothing >= 0) || !std::isfinite(smoothing))
+    throw std::invalid_argument("path derivatives: smoothing " + std::to_string(smoothing) + " s (expected >= 0)");
   const motion::Skeleton& skeleton = *motion.skeleton;
   const int frames = motion.frame_count();
   const int channels = skeleton.channel_count();
@@ -19,6 +54,7 @@ PathDerivatives path_derivatives(const motion::Motion& motion) {
     if (!motion::is_rotation(skeleton.joint(joint).channels[static_cast<std::size_t>(index)].kind)) continue;
     for (int f = 1; f < frames; ++f) q(f, c) = motion::nearest_angle(q(f, c), q(f - 1, c));
   }
+  if (smoothing * motion.fps > 0.05) q = gaussian_smoothed(q, smoothing * motion.fps);
   const double h = 1.0 / motion.fps;
   if (frames == 2) {
     d.first.row(0) = (q.row(1) - q.row(0)) / h;

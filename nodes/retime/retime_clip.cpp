@@ -81,7 +81,7 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
   }
   ClipRetime out;
   out.torque_scale = torque_scale(skeleton, original);
-  const BakedObjective objective(hulls, torques, targets, fps,
+  const BakedObjective objective(hulls, torques, targets, skeleton, fps,
                                  {.alpha = options.alpha, .beta = options.beta, .torque_scale = out.torque_scale});
 
   std::vector<Polygon> polygons;

@@ -14,6 +14,7 @@ namespace {
 // |p̈| <= 60, 0.1 <= ṗ² <= 30, except for a flight second (source 0.5 to 1.5 s) whose polytope is
 // empty: the single point (0, 1).
 struct BoxAndFlight {
+  kg::motion::Skeleton skeleton;  // a root with the two channels
   Hulls hulls;
   std::vector<FrameTorques> torques;
   std::vector<Eigen::VectorXd> targets;
@@ -21,6 +22,9 @@ struct BoxAndFlight {
 
 BoxAndFlight box_and_flight() {
   BoxAndFlight c;
+  c.skeleton.add_joint({.name = "root",
+                        .channels = {{.kind = kg::motion::ChannelKind::Xposition},
+                                     {.kind = kg::motion::ChannelKind::Yposition}}});
   FrameTorques t;
   t.velocity = Eigen::Vector2d(1, 0);
   t.acceleration = Eigen::Vector2d(0, 0.5);
@@ -61,7 +65,7 @@ TEST_CASE("bake_quadratic reproduces |τ − τ'|²") {
 
 TEST_CASE("the baked objective's partial derivatives match finite differences, inside and outside hulls") {
   const BoxAndFlight c = box_and_flight();
-  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 10, .beta = 0.01});
+  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 10, .beta = 0.01});
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> p(0.02, 1.98), a(-4, 4), b(-0.5, 7);
   for (int i = 0; i < 200; ++i) {
@@ -84,7 +88,7 @@ TEST_CASE("the baked objective's partial derivatives match finite differences, i
 
 TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every sector") {
   const BoxAndFlight c = box_and_flight();
-  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 1, .beta = 2, .torque_scale = 0.5});
+  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 1, .beta = 2, .torque_scale = 0.5});
   for (int f : {3, 20}) {
     for (const Eigen::Vector2d x : {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
       const Eigen::VectorXd tau = c.torques[static_cast<std::size_t>(f)].at(x.y(), x.x(), c.hulls.gravity);
@@ -100,17 +104,19 @@ TEST_CASE("retiming a clip with a flight to a shorter duration keeps the flight 
   // 2 s of source into 1.3 s: the flight second keeps its second, the other second of source
   // plays in 0.3 s.
   const BoxAndFlight c = box_and_flight();
-  const BakedObjective objective(c.hulls, c.torques, c.targets, 30, {.alpha = 1000, .beta = 0.01});
+  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 1000, .beta = 0.01});
   const RetimeResult r = retime(objective, {.duration = 1.3, .knot_spacing = 0.05});
   INFO(r.message);
   CHECK(r.converged);
-  int ground = 0, inside = 0, flight = 0, flight_at_speed = 0;
+  int flight = 0, flight_at_speed = 0;
+  double worst_outside = 0;  // plane units, on the ground
   for (double t = 0; t <= 1.3; t += 0.005) {
     const WarpSample s = r.warp.sample(t);
     const int f = static_cast<int>(std::lround(s.p * 30));
     if (f >= 18 && f <= 42) ++flight, flight_at_speed += std::abs(s.pdot - 1) < 0.1;
-    if (f < 15 || f > 45) ++ground, inside += objective.parts(f, s.pddot, s.pdot * s.pdot, 1e-6).inside;
+    if (f < 15 || f > 45)
+      worst_outside = std::max(worst_outside, std::sqrt(objective.parts(f, s.pddot, s.pdot * s.pdot).feasibility / 1000));
   }
   CHECK(flight_at_speed == flight);
-  CHECK(inside == ground);
+  CHECK(worst_outside < 0.5);  // against a box 120 wide and 30 high: the speed-up after landing
 }

@@ -47,3 +47,31 @@ TEST_CASE("path_derivatives of clips of one and two frames") {
   CHECK(d.first(1, 0) == Approx((two.values(1, 0) - two.values(0, 0)) * 30));
   CHECK(d.second.isZero());
 }
+
+TEST_CASE("smoothed path derivatives keep a parabola's second derivative and quieten noise") {
+  const double fps = 120;
+  motion::Motion m = known_curves(240, fps);
+  for (int f = 0; f < m.frame_count(); ++f) {
+    const double t = f / fps;
+    m.values(f, 0) = 2 + 1.5 * t - 4.905 * t * t;  // a flight under 9.81 m/s²
+  }
+  motion::Motion noisy = m;
+  std::uint32_t state = 7;
+  for (int f = 0; f < m.frame_count(); ++f) {
+    state = state * 1664525u + 1013904223u;
+    noisy.values(f, 0) += 0.001 * ((state >> 8) / double(1 << 24) - 0.5);  // a millimetre of capture noise
+  }
+  const retime::PathDerivatives clean = retime::path_derivatives(m, 0.04);
+  const retime::PathDerivatives raw = retime::path_derivatives(noisy);
+  const retime::PathDerivatives smooth = retime::path_derivatives(noisy, 0.04);
+  double raw_error = 0, smooth_error = 0;
+  for (int f = 25; f + 25 < m.frame_count(); ++f) {  // beyond the kernel's reach of the ends
+    CHECK(clean.second(f, 0) == Approx(-9.81).epsilon(1e-9));
+    CHECK(clean.first(f, 0) == Approx(1.5 - 9.81 * f / fps).margin(1e-9));
+    raw_error = std::max(raw_error, std::abs(raw.second(f, 0) + 9.81));
+    smooth_error = std::max(smooth_error, std::abs(smooth.second(f, 0) + 9.81));
+  }
+  CHECK(raw_error > 20);
+  CHECK(smooth_error < 1);
+  CHECK_THROWS_WITH(retime::path_derivatives(m, -1), Catch::Matchers::Contains("smoothing"));
+}

@@ -8,6 +8,13 @@
 // torque term dimensionless (torque_scale below), so α and β weigh comparable quantities whatever
 // the body. Between frames the two frames' integrands are interpolated linearly in source time.
 //
+// In flight (no contact) the hull is the single least-squares point of the root's rows, and the
+// feasibility term is measured in those rows rather than in the plane: α |r(p̈, ṗ²)|² / W² − its
+// least value, where r is the root's residual (what nothing could supply: zero on a ballistic
+// path) and W the body's weight, so a flight played too fast or slow costs what the wrong gravity
+// costs, and the direction the rows hardly determine (p̈ at the apex) costs little. It is a
+// quadratic too, baked like the torque term.
+//
 //   BakedObjective objective(hulls, torques, targets, {.alpha = 1000, .beta = 1, .torque_scale = s});
 //   int hint = 0;
 //   SampleCost c = objective.evaluate(1.25, 0.0, 1.0, hint);   // at source 1.25 s, original timing
@@ -57,8 +64,9 @@ class BakedObjective final : public PathObjective {
   // Bakes every frame's sectors (the Bake step). `hulls` is not owned and must outlive the
   // objective; torques and targets have one entry per frame (channel_count each). Throws
   // std::invalid_argument for sizes that disagree, fewer than 2 frames or weights out of range.
+  // `skeleton` gives the root's rows (its root joints' channels).
   BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques, std::span<const Eigen::VectorXd> targets,
-                 double source_fps, const ObjectiveWeights& weights);
+                 const motion::Skeleton& skeleton, double source_fps, const ObjectiveWeights& weights);
 
   SampleCost evaluate(double p, double pddot, double pdot_squared, int& hint) const override;
   double source_duration() const override { return (static_cast<double>(quadratics_.size()) - 1) / fps_; }
@@ -86,6 +94,7 @@ class BakedObjective final : public PathObjective {
   double fps_;
   ObjectiveWeights weights_;
   std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
+  std::vector<Quadratic> flight_;                   // per frame: the flight feasibility term (zero off flight)
 };
 
 }  // namespace kg::retime
