@@ -1,16 +1,20 @@
 // Per frame detail behind the "Feasible" row of bench_retime (McCann et al. 2006 fig. 12: the
 // milliseconds per frame to find the feasible region and set up the contact model) on a CMU clip,
 // one thread: contact detection, every frame's hull with GLPK (build_hulls), the statuses, LP and
-// vertex counts, and the force model's queries.
+// vertex counts, and the force model's queries; with --frames, one line per frame.
 //
-// The body: build_body_model's de Leva male table at 70 kg, torque limits ±limit N m on every
-// actuated rotation channel (the root 0). The coefficients: path_torques (the inverse dynamics)
-// on the clip, its channels first smoothed by a Gaussian of --smooth seconds (default 0: none;
-// captured markers jitter by a millimetre or so, which second differences at 120 Hz turn into
-// metres per second², so the original timing falls outside most hulls unsmoothed).
+// The pipeline is graphs/retime.yaml's: the clip imported (an .amc with its .asf, or a .bvh;
+// --source-fps overrides the file's rate, as 16_01.bvh needs: 120), resampled to --fps (0: kept),
+// build_body_model's de Leva male table at 70 kg with frame 0 as reference pose, torque limits
+// ±limit N m on every actuated channel (default inf: none, as the graph; the root 0), detected
+// contacts, path_torques with the derivatives taken through a Gaussian of --smooth seconds
+// (default 0.04, the graph's; 0: raw differences, where a millimetre of capture jitter becomes
+// metres per second² at 120 Hz and the original timing falls outside most hulls).
 //
-//   bench_hulls [--clip path.amc --asf path.asf] [--limit N·m | --limit inf] [--smooth seconds]
-//               [--repeat n] [--frames]
+//   bench_hulls [--clip path.amc [--asf path.asf] | --clip path.bvh] [--source-fps f] [--fps f]
+//               [--limit N·m | --limit inf] [--smooth seconds] [--repeat n] [--frames]
+//
+// e.g. bench_hulls --clip ../shared/data/cmu/bvh_daz/13_13.bvh --fps 30 --frames
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -23,7 +27,8 @@
 #include <vector>
 
 #include "kg/io/asf_amc.hpp"
-#include "kg/motion/rotations.hpp"
+#include "kg/motion/kinematics.hpp"
+#include "kg/motion/resample.hpp"
 #include "kg/retime/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
@@ -41,48 +46,25 @@ double ms_since(Clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
 }
 
-// The clip with every channel smoothed by a Gaussian of sigma_s seconds (rotation channels
-// unwrapped first, so a turn through ±180 degrees is not averaged away).
-motion::Motion smoothed(const motion::Motion& m, double sigma_s) {
-  if (!(sigma_s > 0)) return m;
-  const motion::Skeleton& sk = *m.skeleton;
-  motion::Motion out = m;
-  motion::FrameMatrix q = m.values;
-  for (int c = 0; c < sk.channel_count(); ++c) {
-    const auto [joint, index] = sk.channel_owner(c);
-    if (motion::is_rotation(sk.joint(joint).channels[static_cast<std::size_t>(index)].kind))
-      for (int f = 1; f < m.frame_count(); ++f) q(f, c) = motion::nearest_angle(q(f, c), q(f - 1, c));
-  }
-  const double sigma = sigma_s * m.fps;
-  const int half = static_cast<int>(std::ceil(3 * sigma)), frames = m.frame_count();
-  for (int f = 0; f < frames; ++f) {
-    Eigen::RowVectorXd sum = Eigen::RowVectorXd::Zero(sk.channel_count());
-    double weight = 0;
-    for (int k = -half; k <= half; ++k) {
-      const double w = std::exp(-0.5 * k * k / (sigma * sigma));
-      sum += w * q.row(std::clamp(f + k, 0, frames - 1));
-      weight += w;
-    }
-    out.values.row(f) = sum / weight;
-  }
-  return out;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   const std::string data = KG_DATA_DIR;
   std::string amc = data + "/cmu/asf_amc/16_15.amc", asf = data + "/cmu/asf_amc/16.asf";
-  double limit = 300;
+  double limit = INFINITY, source_fps = 0, fps = 0;
   int repeat = 5;
-  bool per_frame = false;
-  double smooth_s = 0;
+  bool per_frame = false, clip_given = false, asf_given = false;
+  double smooth_s = 0.04;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--clip" && i + 1 < argc)
-      amc = argv[++i];
+      amc = argv[++i], clip_given = true;
     else if (a == "--asf" && i + 1 < argc)
-      asf = argv[++i];
+      asf = argv[++i], asf_given = true;
+    else if (a == "--source-fps" && i + 1 < argc)
+      source_fps = std::stod(argv[++i]);
+    else if (a == "--fps" && i + 1 < argc)
+      fps = std::stod(argv[++i]);
     else if (a == "--limit" && i + 1 < argc)
       limit = std::strcmp(argv[++i], "inf") == 0 ? INFINITY : std::stod(argv[i]);
     else if (a == "--repeat" && i + 1 < argc)
@@ -93,26 +75,32 @@ int main(int argc, char** argv) {
       smooth_s = std::stod(argv[++i]);
     else {
       std::fprintf(stderr,
-                   "usage: bench_hulls [--clip x.amc --asf x.asf] [--limit N|inf] [--smooth s] [--repeat n] "
-                   "[--frames]\n");
+                   "usage: bench_hulls [--clip x.amc --asf x.asf | --clip x.bvh] [--source-fps f] [--fps f] "
+                   "[--limit N|inf] [--smooth s] [--repeat n] [--frames]\n");
       return 2;
     }
   }
-  if (!std::filesystem::exists(amc) || !std::filesystem::exists(asf)) {
+  // A clip of one's own: a .bvh needs no skeleton, an .amc's is guessed beside it (import_motion).
+  if (clip_given && !asf_given) asf.clear();
+  if (!std::filesystem::exists(amc) || (!asf.empty() && !std::filesystem::exists(asf))) {
     std::printf("skipped: %s or %s not found\n", amc.c_str(), asf.c_str());
     return 0;
   }
-  const motion::Motion walk = io::import_asf_amc(asf, amc, {}).motion;
+  io::ImportOptions import;
+  import.fps = source_fps;
+  motion::Motion walk = io::import_motion(amc, asf, import).motion;
+  const double file_fps = walk.fps;
+  if (fps > 0) walk = motion::resample(walk, fps);
   const motion::Skeleton& sk = *walk.skeleton;
   const int frames = walk.frame_count(), channels = sk.channel_count();
 
   retime::BodySpec spec;
-  spec.torque_limits = {{".*", {limit}, {}}};
-  const BodyModel body = retime::build_body_model(walk.skeleton, spec).body;
-  const motion::Motion clip = smoothed(walk, smooth_s);
+  if (std::isfinite(limit)) spec.torque_limits = {{".*", {limit}, {}}};
+  const Eigen::RowVectorXd reference = walk.values.row(0);
+  const BodyModel body = retime::build_body_model(walk.skeleton, spec, &reference).body;
   auto t0 = Clock::now();
   const std::vector<FrameTorques> torques =
-      retime::path_torques(body, clip, retime::path_derivatives(clip)).frames;
+      retime::path_torques(body, walk, retime::path_derivatives(walk, smooth_s)).frames;
   const double force_ms = ms_since(t0) / frames;
 
   t0 = Clock::now();
@@ -158,9 +146,10 @@ int main(int argc, char** argv) {
   std::sort(sorted.begin(), sorted.end());
 
   std::printf(
-      "clip %s: %d frames at %.0f fps, %d channels, %d rows per LP (torque limit %g N m), %.1f kg (de "
-      "Leva), channels smoothed %g s\n",
-      walk.name.c_str(), frames, walk.fps, channels, rows, limit, body.total_mass(), smooth_s);
+      "clip %s: %d frames at %.0f fps (file %.0f fps), %d channels, %d rows per LP (torque limit %g N m), "
+      "%.1f kg "
+      "(de Leva), derivatives smoothed %g s\n",
+      walk.name.c_str(), frames, walk.fps, file_fps, channels, rows, limit, body.total_mass(), smooth_s);
   std::printf("contacts: %zu patches, λ columns per frame mean %.1f, max %d\n", contacts.patches.size(),
               static_cast<double>(columns) / frames, max_columns);
   std::printf(
@@ -215,13 +204,24 @@ int main(int argc, char** argv) {
       query_ns, sector_ms, sink == 12345.678 ? " " : "");
 
   if (per_frame) {
-    std::printf("\nframe  status      patches  λ   LPs  vertices  ms      centre            message\n");
+    // The centre of mass's vertical acceleration by second differences of the clip's frames: about
+    // -9.8 m/s² in true flight, so a flight frame far from it is a contact detected late or early.
+    std::vector<double> com(static_cast<std::size_t>(frames));
+    for (int f = 0; f < frames; ++f)
+      com[static_cast<std::size_t>(f)] = retime::body_com(body, walk.values.row(f)).y();
+    std::printf(
+        "\nframe  status      patches  λ   LPs  vertices  ms      CoM ÿ m/s²  centre            message\n");
     for (int f = 0; f < frames; ++f) {
       const FrameHull& h = hulls.frames[static_cast<std::size_t>(f)];
-      std::printf("%5d  %-10s  %7zu  %2d  %3d  %8zu  %6.3f  (%6.3f, %6.3f)  %s\n", f, to_string(h.status),
-                  contacts.frames[static_cast<std::size_t>(f)].patches().size(), h.column_count(), h.lp_count,
-                  h.vertices.size(), frame_ms[static_cast<std::size_t>(f)], h.centre.x(), h.centre.y(),
-                  h.message.c_str());
+      const double ydd = f > 0 && f + 1 < frames
+                             ? (com[static_cast<std::size_t>(f) + 1] - 2 * com[static_cast<std::size_t>(f)] +
+                                com[static_cast<std::size_t>(f) - 1]) *
+                                   walk.fps * walk.fps
+                             : NAN;
+      std::printf("%5d  %-10s  %7zu  %2d  %3d  %8zu  %6.3f  %10.2f  (%6.3f, %6.3f)  %s\n", f,
+                  to_string(h.status), contacts.frames[static_cast<std::size_t>(f)].patches().size(),
+                  h.column_count(), h.lp_count, h.vertices.size(), frame_ms[static_cast<std::size_t>(f)], ydd,
+                  h.centre.x(), h.centre.y(), h.message.c_str());
     }
   }
   return 0;
