@@ -108,6 +108,14 @@ class HullsNode final : public graph::Node {
     if (contacts.frame_count() != source.frame_count())
       throw std::invalid_argument("the contacts have " + std::to_string(contacts.frame_count()) +
                                   " frames and the torques " + std::to_string(source.frame_count()));
+    bool touches = false;
+    for (const ContactFrame& frame : contacts.frames) touches = touches || !frame.points.empty();
+    if (!touches)
+      throw std::invalid_argument(
+          "no frame of the clip touches anything (" + std::to_string(contacts.frame_count()) +
+          " frames of flight): nothing could have moved its root, so no timing of it is physical. Check the "
+          "feet the contacts found and their thresholds (retime.contacts: height_threshold, speed_threshold, "
+          "floor), or give the contacts in a file (path)");
     body.gravity = gravity_from(gravity_, body.gravity);
     // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
     PathTorques edited{source.skeleton, source.fps, {}, "", {}};
