@@ -72,6 +72,7 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
   quadratics_.resize(frames);
   flight_.assign(frames, Quadratic{});
+  flight_least_.assign(frames, 0.0);
   std::vector<int> root_rows;
   for (const motion::Joint& joint : skeleton.joints())
     if (joint.parent < 0)
@@ -92,7 +93,8 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
       // The weight: what the root's rows need to hold the body still.
       const double weight = std::max(r0.norm(), 1e-9);
       Quadratic q = bake_quadratic(r0, ra, rb, Eigen::VectorXd::Zero(n), weights.alpha / (weight * weight));
-      q[5] -= kg::retime::evaluate(q, hull.vertices[0].x(), hull.vertices[0].y());  // 0 at the closest point
+      flight_least_[f] = kg::retime::evaluate(q, hull.vertices[0].x(), hull.vertices[0].y());
+      q[5] -= flight_least_[f];  // 0 at the closest point
       flight_[f] = q;
     }
     quadratics_[f].reserve(hull.sectors.size());
@@ -151,7 +153,8 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
 
 Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides, double extent) const {
   const FrameHull& hull = hulls_.frames.at(static_cast<std::size_t>(frame));
-  if (hull.status != HullStatus::Flight || weights_.alpha <= 0) return hull.vertices;
+  if (hull.status == HullStatus::Feasible) return hull.vertices;
+  if (hull.status == HullStatus::Infeasible || weights_.alpha <= 0) return {};
   const Quadratic& q = flight_[static_cast<std::size_t>(frame)];
   // Q(x) = x^T A x + g^T x + q5 with x = (p̈, ṗ²); its minimum m and the ellipse Q <= α tol².
   Eigen::Matrix2d A;
@@ -161,9 +164,10 @@ Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides
   const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff()));
   const Eigen::Matrix2d V = eig.eigenvectors();
   const Eigen::Vector2d m = -0.5 * (V * (V.transpose() * g).cwiseQuotient(lambda));
-  const double level = weights_.alpha * tolerance * tolerance - kg::retime::evaluate(q, m.x(), m.y());
+  const double level = weights_.alpha * tolerance * tolerance -
+                       (kg::retime::evaluate(q, m.x(), m.y()) + flight_least_[static_cast<std::size_t>(frame)]);
   Polygon out;
-  if (!(level > 0)) return hull.vertices;
+  if (!(level > 0)) return out;
   for (int k = 0; k < sides; ++k) {
     const double angle = 2 * std::numbers::pi * k / sides;
     Eigen::Vector2d u(std::cos(angle), std::sin(angle));

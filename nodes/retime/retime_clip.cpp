@@ -86,10 +86,26 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
 
   std::vector<Polygon> polygons;
   auto time_optimal_playback = [&] {
-    // Flight frames admit the timings whose root residual stays within a tenth of the weight.
-    if (polygons.empty())
-      for (int f = 0; f < frames; ++f) polygons.push_back(objective.admissible_region(f, 0.1));
-    return time_optimal(polygons, fps, options.time_optimal);
+    // Flight frames admit the timings whose root residual stays within a quarter of the weight
+    // (captured flights scatter by that much from frame to frame).
+    // Frames no timing makes physical (an empty polytope, a flight frame whose best residual is
+    // larger: missed contacts, a T-pose frame) bound nothing: the plane's box.
+    int unbounded = 0;
+    if (polygons.empty()) {
+      const double a = hulls.options.pddot_max, b = hulls.options.pdot2_max;
+      for (int f = 0; f < frames; ++f) {
+        polygons.push_back(objective.admissible_region(f, 0.25));
+        if (polygons.back().empty()) {
+          polygons.back() = {{-a, 0}, {a, 0}, {a, b}, {-a, b}};
+          ++unbounded;
+        }
+      }
+    }
+    TimeOptimalResult r = time_optimal(polygons, fps, options.time_optimal);
+    if (unbounded)
+      r.message += " (" + std::to_string(unbounded) +
+                   " frames no timing makes physical bound nothing: flight or contact the detection misread)";
+    return r;
   };
   std::ostringstream message;
   if (options.mode == RetimeMode::TimeOptimal) {

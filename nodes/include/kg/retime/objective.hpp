@@ -83,8 +83,9 @@ class BakedObjective final : public PathObjective {
   Parts parts(int frame, double pddot, double pdot_squared, double tolerance = 1e-9) const;
   // For a flight frame, the timings whose root residual stays within `tolerance` of the body's
   // weight: an ellipse about the least-squares point (a polygon of `sides` vertices,
-  // counter-clockwise; an extent the rows do not bound is cut at `extent` plane units). For other
-  // frames, the hull's vertices.
+  // counter-clockwise; an extent the rows do not bound is cut at `extent` plane units); empty when
+  // even the least-squares point leaves more (a contact the detection missed). For a feasible
+  // frame, the hull's vertices; for an infeasible one, empty (no timing of it is physical).
   Polygon admissible_region(int frame, double tolerance, int sides = 16, double extent = 100) const;
   const Quadratic& quadratic(int frame, int sector) const {
     return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
@@ -101,6 +102,7 @@ class BakedObjective final : public PathObjective {
   ObjectiveWeights weights_;
   std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
   std::vector<Quadratic> flight_;                   // per frame: the flight feasibility term (zero off flight)
+  std::vector<double> flight_least_;                // per frame: α |r|² / W² at the least-squares point
 };
 
 }  // namespace kg::retime
