@@ -129,17 +129,16 @@ int find_sector(const FrameHull& h, const Eigen::Vector2d& x, int hint) {
   if (n == 0) throw std::invalid_argument("force model: the hull has no fan (build_fan)");
   int k = hint >= 0 && hint < n ? hint : 0;
   const Eigen::Vector2d d = x - h.centre;
-  const double dn = d.norm();
-  if (dn == 0) return k;
-  auto inside = [&](const FanSector& s, double slack) {
-    return cross(s.from, d) >= -slack * s.from.norm() * dn && cross(d, s.to) >= -slack * s.to.norm() * dn;
-  };
+  if (d.x() == 0 && d.y() == 0) return k;
   // Walk one way round from the hint (a fixed direction always ends within n steps; the first
-  // test picks the nearer way for a nearby query).
+  // test picks the nearer way for a nearby query). Exact tests first: no norms on the hot path.
   const int step = cross(h.sectors[static_cast<std::size_t>(k)].from, d) < 0 ? n - 1 : 1;
-  for (int i = 0; i < n; ++i, k = (k + step) % n)
-    if (inside(h.sectors[static_cast<std::size_t>(k)], 0.0)) return k;
+  for (int i = 0; i < n; ++i, k = (k + step) % n) {
+    const FanSector& s = h.sectors[static_cast<std::size_t>(k)];
+    if (cross(s.from, d) >= 0 && cross(d, s.to) >= 0) return k;
+  }
   // Rounding on a ray: accept the sector the point is nearest to being inside.
+  const double dn = d.norm();
   int best = 0;
   double best_slack = std::numeric_limits<double>::infinity();
   for (int i = 0; i < n; ++i) {

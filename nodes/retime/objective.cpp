@@ -99,6 +99,11 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
     }
     quadratics_[f].reserve(hull.sectors.size());
     for (std::size_t s = 0; s < hull.sectors.size(); ++s) {
+      // Without contact forces every sector has the same τ: bake it once.
+      if (s > 0 && hull.N.cols() == 0) {
+        quadratics_[f].push_back(quadratics_[f].front());
+        continue;
+      }
       sector_torques(hull, static_cast<int>(s), torques[f], hulls.gravity, t);
       quadratics_[f].push_back(bake_quadratic(t.t0, t.pddot, t.pdot2, targets[f], w));
     }
