@@ -5,24 +5,12 @@
 #include <stdexcept>
 #include <string>
 
+#include "kg/motion/rotations.hpp"
+
 namespace kg::motion {
 
 namespace {
 
-// M <- M * R_axis(angle), touching only the two columns the rotation mixes.
-inline void post_rotate(Eigen::Matrix3d& M, int axis, double c, double s) {
-  const int l = axis == 2 ? 0 : axis + 1;
-  const int m = axis == 0 ? 2 : axis - 1;
-  const Eigen::Vector3d cl = M.col(l);
-  const Eigen::Vector3d cm = M.col(m);
-  M.col(l) = c * cl + s * cm;
-  M.col(m) = c * cm - s * cl;
-}
-
-inline bool is_identity(const Eigen::Matrix3d& A) {
-  return A(0, 0) == 1 && A(1, 1) == 1 && A(2, 2) == 1 && A(0, 1) == 0 && A(0, 2) == 0 && A(1, 0) == 0 &&
-         A(1, 2) == 0 && A(2, 0) == 0 && A(2, 1) == 0;
-}
 
 // Parent frame from joint frame as rotation R and translation t (skeleton.hpp's formula).
 inline void local_rt(const Joint& jt, const double* values, Eigen::Matrix3d& R, Eigen::Vector3d& t) {

@@ -16,6 +16,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "kg/graph/error.hpp"
+#include "kg/graph/yaml_reader.hpp"
 
 namespace kg::retarget {
 
@@ -30,26 +31,20 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-class Reader {
+class Reader : public graph::YamlReader {
  public:
   Reader(std::string file, std::span<const motion::Motion> characters)
-      : file_(std::move(file)), chars_(characters) {}
+      : YamlReader(std::move(file)), chars_(characters) {}
 
-  ConstraintSet read(const std::string& text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::Exception& e) {
-      fail("malformed YAML: " + e.msg, e.mark);
-    }
-    if (!root.IsDefined() || root.IsNull()) throw Error("empty constraint file (expected 'version: 1')", {file_, 1, 1});
+  ConstraintSet read(const std::string& source) {
+    const YAML::Node root = load(source, "empty constraint file (expected 'version: 1')");
     if (!root.IsMap()) fail("a constraint file must be a map (version, constraints, limits)", root.Mark());
     check_keys(root, "", {"version", "doc", "constraints", "limits", "limits_character"});
-    if (!root["version"]) throw Error("missing 'version: 1'", {file_, 1, 1});
-    const int version = as_int(root["version"], "version");
+    if (!root["version"]) throw Error("missing 'version: 1'", {path(), 1, 1});
+    const int version = integer(root["version"], "version");
     if (version != kConstraintFormatVersion)
       fail("unsupported version " + std::to_string(version) + " (this reads version 1)", root["version"].Mark());
-    if (chars_.empty()) throw Error("no character motion to resolve joint names against", {file_, 1, 1});
+    if (chars_.empty()) throw Error("no character motion to resolve joint names against", {path(), 1, 1});
     ConstraintSet set;
     if (const YAML::Node cs = root["constraints"]) {
       if (!cs.IsSequence() && !cs.IsNull()) fail("'constraints' must be a list", cs.Mark());
@@ -65,37 +60,8 @@ class Reader {
   }
 
  private:
-  [[noreturn]] void fail(const std::string& message, const YAML::Mark& m) const {
-    throw Error(message, m.line < 0 ? SourceLocation{file_, 0, 0} : SourceLocation{file_, m.line + 1, m.column + 1});
-  }
+  double as_double(const YAML::Node& n, const std::string& what) const { return number(n, what, true); }
 
-  void check_keys(const YAML::Node& map, const std::string& path, const std::vector<std::string>& allowed) const {
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      const std::string key = it->first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-      std::string msg = "unknown key '" + (path.empty() ? key : path + "." + key) + "'";
-      const std::string near = graph::nearest_name(key, allowed);
-      if (!near.empty()) msg += " (nearest: '" + near + "')";
-      fail(msg + "; allowed: " + join(allowed), it->first.Mark());
-    }
-  }
-
-  double as_double(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected a number", n.Mark());
-    try {
-      return n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(what + ": expected a number, got '" + n.Scalar() + "'", n.Mark());
-    }
-  }
-  int as_int(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected an integer", n.Mark());
-    try {
-      return n.as<int>();
-    } catch (const YAML::Exception&) {
-      fail(what + ": expected an integer, got '" + n.Scalar() + "'", n.Mark());
-    }
-  }
   bool as_bool(const YAML::Node& n, const std::string& what) const {
     if (!n.IsScalar()) fail(what + ": expected true or false", n.Mark());
     try {
@@ -104,10 +70,7 @@ class Reader {
       fail(what + ": expected true or false, got '" + n.Scalar() + "'", n.Mark());
     }
   }
-  std::string as_string(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected a string", n.Mark());
-    return n.Scalar();
-  }
+
   std::vector<double> numbers(const YAML::Node& n, const std::string& what) const {
     if (!n.IsSequence()) fail(what + ": expected a list of numbers", n.Mark());
     std::vector<double> out;
@@ -116,7 +79,7 @@ class Reader {
   }
 
   int character_index(const YAML::Node& n, const std::string& what) const {
-    const int c = as_int(n, what);
+    const int c = integer(n, what);
     if (c < 0 || c >= static_cast<int>(chars_.size()))
       fail(what + ": character " + std::to_string(c) + " does not exist (" + std::to_string(chars_.size()) +
                " given)",
@@ -127,7 +90,7 @@ class Reader {
   const motion::Skeleton& skeleton(int character) const { return *chars_[static_cast<std::size_t>(character)].skeleton; }
 
   int joint(const YAML::Node& n, int character) const {
-    const std::string name = as_string(n, "joint");
+    const std::string name = text(n, "joint");
     const motion::Skeleton& sk = skeleton(character);
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
@@ -158,7 +121,7 @@ class Reader {
       p.local = Eigen::Vector3d(v[0], v[1], v[2]);
       if (!p.local.allFinite()) fail(path + ".offset: not finite", off.Mark());
     }
-    frame_offset = n["frame_offset"] ? as_int(n["frame_offset"], path + ".frame_offset") : 0;
+    frame_offset = n["frame_offset"] ? integer(n["frame_offset"], path + ".frame_offset") : 0;
     return p;
   }
 
@@ -176,9 +139,9 @@ class Reader {
       check_keys(n, path, {"joint", "channel", "character", "frame_offset"});
       if (n["character"]) ch.character = character_index(n["character"], path + ".character");
       if (!n["joint"] || !n["channel"]) fail(path + ": needs 'joint' and 'channel'", n.Mark());
-      joint_name = as_string(n["joint"], path + ".joint");
-      channel_name = as_string(n["channel"], path + ".channel");
-      if (n["frame_offset"]) frame_offset = as_int(n["frame_offset"], path + ".frame_offset");
+      joint_name = text(n["joint"], path + ".joint");
+      channel_name = text(n["channel"], path + ".channel");
+      if (n["frame_offset"]) frame_offset = integer(n["frame_offset"], path + ".frame_offset");
     } else {
       fail(path + ": expected 'Joint.Channel' or {joint, channel}", n.Mark());
     }
@@ -226,7 +189,7 @@ class Reader {
     if (!n.IsSequence()) fail(what + ": expected a list", n.Mark());
     const bool seconds = given[0] == 't' || std::string(given) == "at_times";
     std::vector<int> frames;
-    for (const YAML::Node& x : n) frames.push_back(seconds ? time_to_frame(x, what) : as_int(x, what));
+    for (const YAML::Node& x : n) frames.push_back(seconds ? time_to_frame(x, what) : integer(x, what));
     const bool range = std::string(given) == "frames" || std::string(given) == "times";
     if (range) {
       if (frames.size() != 2) fail(what + ": expected [first, last], got " + std::to_string(frames.size()) + " entries", n.Mark());
@@ -249,11 +212,11 @@ class Reader {
                 "at_times", "weight"});
     Constraint c;
     if (!n["kind"]) fail(path + ": missing 'kind'", n.Mark());
-    c.kind = as_string(n["kind"], path + ".kind");
-    c.label = n["label"] ? as_string(n["label"], path + ".label") : c.kind + " " + std::to_string(index);
+    c.kind = text(n["kind"], path + ".kind");
+    c.label = n["label"] ? text(n["label"], path + ".label") : c.kind + " " + std::to_string(index);
     if (const YAML::Node r = n["relation"]) {
       try {
-        c.relation = relation_from_string(as_string(r, path + ".relation"));
+        c.relation = relation_from_string(text(r, path + ".relation"));
       } catch (const std::invalid_argument& e) {
         fail(path + ".relation: " + e.what(), r.Mark());
       }
@@ -371,7 +334,6 @@ class Reader {
     }
   }
 
-  std::string file_;
   std::span<const motion::Motion> chars_;
   ConstraintKindTable builtin_ = ConstraintKindTable::builtin();
 };

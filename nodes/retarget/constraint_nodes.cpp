@@ -24,32 +24,6 @@ using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
 
-std::vector<std::string> split_names(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    const auto a = item.find_first_not_of(" \t");
-    const auto b = item.find_last_not_of(" \t");
-    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
-  }
-  return out;
-}
-
-double parse_floor(const std::string& text) {
-  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
-  return v;
-}
-
 std::string count_summary(const std::map<std::string, int>& kinds) {
   std::string out;
   for (const auto& [k, n] : kinds) out += (out.empty() ? "" : ", ") + k + " " + std::to_string(n);
@@ -75,14 +49,14 @@ const graph::PortSpec kConstraintsOut{"constraints", "kg.Constraints", true,
 class FootplantsNode final : public Node {
  public:
   explicit FootplantsNode(const Params& p) {
-    detect_.points = split_names(p.get<std::string>("points"));
+    detect_.points = retarget::split_names(p.get<std::string>("points"));
     detect_.height_threshold = p.get<double>("height_threshold");
     detect_.speed_threshold = p.get<double>("speed_threshold");
     detect_.hysteresis = p.get<double>("hysteresis");
     detect_.min_duration_s = p.get<double>("min_duration_s");
     detect_.trim_distance = p.get<double>("trim_distance");
     detect_.rest_window_s = p.get<double>("rest_window_s");
-    detect_.floor = parse_floor(p.get<std::string>("floor"));
+    detect_.floor = retarget::parse_floor(p.get<std::string>("floor"));
     detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
                                                              : retarget::PlantFlavour::Fixed;
@@ -263,8 +237,8 @@ NodeType constraints_type() {
 class HoldsNode final : public Node {
  public:
   explicit HoldsNode(const Params& p) : weight_(p.get<double>("weight")) {
-    options_.points_a = split_names(p.get<std::string>("points"));
-    options_.points_b = split_names(p.get<std::string>("points2"));
+    options_.points_a = retarget::split_names(p.get<std::string>("points"));
+    options_.points_b = retarget::split_names(p.get<std::string>("points2"));
     options_.max_distance = p.get<double>("max_distance");
     options_.hysteresis = p.get<double>("hysteresis");
     options_.min_duration_s = p.get<double>("min_duration_s");

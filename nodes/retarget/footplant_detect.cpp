@@ -339,4 +339,30 @@ ConstraintSet footplant_constraints(const FootplantDetection& d, int frames, con
   return set;
 }
 
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto a = item.find_first_not_of(" \t");
+    const auto b = item.find_last_not_of(" \t");
+    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
+  }
+  return out;
+}
+
+double parse_floor(const std::string& text) {
+  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
+  return v;
+}
+
 }  // namespace kg::retarget

@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "kg/graph/error.hpp"
+#include "kg/graph/yaml_reader.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
@@ -40,66 +41,9 @@ std::string fmt(double v) {
   return s.str();
 }
 
-class Reader {
+class Reader : public graph::YamlReader {
  public:
-  Reader(const Skeleton& source, std::string path) : source_(source), path_(std::move(path)) {}
-
-  SourceLocation at(const YAML::Node& n) const {
-    const YAML::Mark m = n.Mark();
-    if (m.line < 0) return {path_, 0, 0};
-    return {path_, m.line + 1, m.column + 1};
-  }
-  [[noreturn]] void fail(const std::string& message, const YAML::Node& where) const {
-    throw Error(message, at(where));
-  }
-
-  // Map entries in file order; duplicate keys refused; keys must be scalars.
-  struct Entry {
-    std::string key;
-    YAML::Node key_node, value;
-  };
-  std::vector<Entry> entries(const YAML::Node& map, const std::string& what) const {
-    if (!map.IsMap()) fail(what + " must be a map", map);
-    std::vector<Entry> out;
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      if (!it->first.IsScalar()) fail("a key of " + what + " must be a plain text", it->first);
-      Entry e{it->first.Scalar(), it->first, it->second};
-      for (const Entry& prior : out)
-        if (prior.key == e.key)
-          fail("duplicate key " + in_quotes(e.key) + " in " + what + " (first at " +
-                   at(prior.key_node).to_string() + ")",
-               e.key_node);
-      out.push_back(std::move(e));
-    }
-    return out;
-  }
-  void check_keys(const std::vector<Entry>& es, const std::string& what,
-                  const std::vector<std::string>& allowed) const {
-    for (const Entry& e : es) {
-      if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
-      const std::string near = graph::nearest_name(e.key, allowed);
-      fail("unknown key " + in_quotes(e.key) + " in " + what +
-               (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
-               "; allowed: " + join(allowed),
-           e.key_node);
-    }
-  }
-
-  double number(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected a number", n);
-    double v = 0;
-    const std::string& text = n.Scalar();
-    std::istringstream in(text);
-    in >> v;
-    if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + in_quotes(text), n);
-    if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + in_quotes(text), n);
-    return v;
-  }
-  double positive(const YAML::Node& n, const std::string& what) const {
-    const double v = number(n, what);
-    if (!(v > 0)) fail(what + ": expected a number > 0, got " + fmt(v), n);
-    return v;
-  }
+  Reader(const Skeleton& source, std::string path) : YamlReader(std::move(path)), source_(source) {}
 
   // Per-joint factors from a `bones:` or `lengths:` map, with `fallback` for unmatched joints.
   Eigen::VectorXd factors(const YAML::Node& map, bool lengths, double fallback, const std::string& what,
@@ -152,29 +96,11 @@ class Reader {
   }
 
   LoadedTarget read(std::string_view text, std::shared_ptr<const Skeleton> source_ptr) const {
-    YAML::Node root;
-    try {
-      root = YAML::Load(std::string(text));
-    } catch (const YAML::Exception& e) {
-      const YAML::Mark m = e.mark;
-      throw Error("malformed YAML: " + e.msg,
-                  m.line < 0 ? SourceLocation{path_} : SourceLocation{path_, m.line + 1, m.column + 1});
-    }
-    if (!root.IsDefined() || root.IsNull())
-      throw Error("empty target file (expected version: 1 and one of bones, lengths, morph)", {path_, 1, 1});
+    const YAML::Node root = load(text, "empty target file (expected version: 1 and one of bones, lengths, morph)");
     const std::vector<Entry> top = entries(root, "the target file");
     check_keys(top, "the target file", {"version", "default", "bones", "lengths", "morph"});
-    auto find = [&](const std::string& key) -> const Entry* {
-      for (const Entry& e : top)
-        if (e.key == key) return &e;
-      return nullptr;
-    };
-    const Entry* version = find("version");
-    if (version == nullptr) throw Error("missing 'version: 1'", {path_, 1, 1});
-    if (!version->value.IsScalar() || version->value.Scalar() != "1")
-      fail("unsupported version " + in_quotes(version->value.IsScalar() ? version->value.Scalar() : "?") +
-               " (expected 1)",
-           version->value);
+    check_version(top);
+    auto find = [&](const std::string& key) { return YamlReader::find(top, key); };
     const Entry* def = find("default");
     const double fallback = def != nullptr ? positive(def->value, "default") : 1.0;
     const Entry* bones = find("bones");
@@ -183,7 +109,7 @@ class Reader {
     const int given = (bones != nullptr) + (lengths != nullptr) + (morph != nullptr);
     if (given != 1) {
       const YAML::Node& where =
-          given == 0 ? version->key_node : (morph != nullptr ? morph->key_node : lengths->key_node);
+          given == 0 ? find("version")->key_node : (morph != nullptr ? morph->key_node : lengths->key_node);
       fail(given == 0 ? "expected one of 'bones', 'lengths' or 'morph'"
                       : "give only one of 'bones', 'lengths' and 'morph'",
            where);
@@ -244,7 +170,6 @@ class Reader {
 
  private:
   const Skeleton& source_;
-  std::string path_;
 };
 
 std::string lower_extension(const std::string& path) {

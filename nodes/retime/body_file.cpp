@@ -10,6 +10,7 @@
 
 #include "kg/graph/atomic_file.hpp"
 #include "kg/graph/error.hpp"
+#include "kg/graph/yaml_reader.hpp"
 #include "kg/retime/body_build.hpp"
 
 namespace kg::retime {
@@ -35,79 +36,11 @@ std::string fmt(double v) {
   return s.str();
 }
 
-class Reader {
+class Reader : public graph::YamlReader {
  public:
-  explicit Reader(std::string path) : path_(std::move(path)) {}
+  explicit Reader(std::string path) : YamlReader(std::move(path)) {}
 
-  SourceLocation at(const YAML::Node& n) const {
-    const YAML::Mark m = n.Mark();
-    if (m.line < 0) return {path_, 0, 0};
-    return {path_, m.line + 1, m.column + 1};
-  }
-  [[noreturn]] void fail(const std::string& message, const YAML::Node& where) const {
-    throw Error(message, at(where));
-  }
 
-  struct Entry {
-    std::string key;
-    YAML::Node key_node, value;
-  };
-  // Map entries in file order; duplicate keys refused; keys must be scalars.
-  std::vector<Entry> entries(const YAML::Node& map, const std::string& what) const {
-    if (!map.IsMap()) fail(what + " must be a map", map);
-    std::vector<Entry> out;
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      if (!it->first.IsScalar()) fail("a key of " + what + " must be a plain text", it->first);
-      Entry e{it->first.Scalar(), it->first, it->second};
-      for (const Entry& prior : out)
-        if (prior.key == e.key)
-          fail("duplicate key " + in_quotes(e.key) + " in " + what + " (first at " +
-                   at(prior.key_node).to_string() + ")",
-               e.key_node);
-      out.push_back(std::move(e));
-    }
-    return out;
-  }
-  void check_keys(const std::vector<Entry>& es, const std::string& what,
-                  const std::vector<std::string>& allowed) const {
-    for (const Entry& e : es) {
-      if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
-      const std::string near = graph::nearest_name(e.key, allowed);
-      fail("unknown key " + in_quotes(e.key) + " in " + what +
-               (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
-               "; allowed: " + join(allowed),
-           e.key_node);
-    }
-  }
-
-  // A finite number; with `allow_inf`, also .inf / inf (YAML's and C's spellings).
-  double number(const YAML::Node& n, const std::string& what, bool allow_inf = false) const {
-    if (!n.IsScalar()) fail(what + ": expected a number", n);
-    const std::string& text = n.Scalar();
-    if (allow_inf) {
-      std::string t = text;
-      std::transform(t.begin(), t.end(), t.begin(),
-                     [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-      if (t == ".inf" || t == "+.inf" || t == "inf" || t == "+inf")
-        return std::numeric_limits<double>::infinity();
-    }
-    double v = 0;
-    std::istringstream in(text);
-    in >> v;
-    if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + in_quotes(text), n);
-    if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + in_quotes(text), n);
-    return v;
-  }
-  double positive(const YAML::Node& n, const std::string& what) const {
-    const double v = number(n, what);
-    if (!(v > 0)) fail(what + ": expected a number > 0, got " + fmt(v), n);
-    return v;
-  }
-  double non_negative(const YAML::Node& n, const std::string& what) const {
-    const double v = number(n, what);
-    if (v < 0) fail(what + ": expected a number >= 0, got " + fmt(v), n);
-    return v;
-  }
   std::vector<double> numbers(const YAML::Node& n, const std::string& what, bool allow_inf = false) const {
     if (!n.IsSequence()) fail(what + ": expected a list of numbers", n);
     std::vector<double> out;
@@ -161,28 +94,12 @@ class Reader {
   }
 
   LoadedBodySpec read(std::string_view text, const BodySpec& base) const {
-    YAML::Node root;
-    try {
-      root = YAML::Load(std::string(text));
-    } catch (const YAML::Exception& e) {
-      const YAML::Mark m = e.mark;
-      throw Error("malformed YAML: " + e.msg,
-                  m.line < 0 ? SourceLocation{path_} : SourceLocation{path_, m.line + 1, m.column + 1});
-    }
-    if (!root.IsDefined() || root.IsNull())
-      throw Error("empty body file (expected at least version: 1)", {path_, 1, 1});
+    const YAML::Node root = load(text, "empty body file (expected at least version: 1)");
     const std::vector<Entry> top = entries(root, "the body file");
     check_keys(
         top, "the body file",
         {"version", "table", "mass", "radii", "classes", "segments", "torque_limits", "friction", "gravity"});
-    const Entry* version = nullptr;
-    for (const Entry& e : top)
-      if (e.key == "version") version = &e;
-    if (version == nullptr) throw Error("missing 'version: 1'", {path_, 1, 1});
-    if (!version->value.IsScalar() || version->value.Scalar() != "1")
-      fail("unsupported version " + in_quotes(version->value.IsScalar() ? version->value.Scalar() : "?") +
-               " (expected 1)",
-           version->value);
+    check_version(top);
 
     LoadedBodySpec out{base, {}};
     BodySpec& spec = out.spec;
@@ -296,13 +213,12 @@ class Reader {
       const std::string msg = "mass " + fmt(spec.mass) + " kg with table " + to_string(spec.table) +
                               ": expected > 0 (0 means 'from the volumes' only with cylinders)";
       if (mass != nullptr) fail(msg, mass->value);
-      throw Error(msg, {path_, 1, 1});
+      throw Error(msg, {path(), 1, 1});
     }
     return out;
   }
 
  private:
-  std::string path_;
 };
 
 }  // namespace

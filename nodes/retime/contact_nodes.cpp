@@ -20,36 +20,10 @@ using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
 
-std::vector<std::string> split_names(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream in(text);
-  std::string item;
-  while (std::getline(in, item, ',')) {
-    const auto a = item.find_first_not_of(" \t");
-    const auto b = item.find_last_not_of(" \t");
-    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
-  }
-  return out;
-}
-
-double parse_floor(const std::string& text) {
-  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size() || !std::isfinite(v))
-    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
-  return v;
-}
-
 class ContactsNode final : public Node {
  public:
   explicit ContactsNode(const Params& p) : path_(p.get<std::string>("path")) {
-    options_.feet = split_names(p.get<std::string>("feet"));
+    options_.feet = retarget::split_names(p.get<std::string>("feet"));
     options_.heel_ratio = p.get<double>("heel_ratio");
     options_.width_ratio = p.get<double>("width_ratio");
     options_.plants.height_threshold = p.get<double>("height_threshold");
@@ -57,7 +31,7 @@ class ContactsNode final : public Node {
     options_.plants.hysteresis = p.get<double>("hysteresis");
     options_.plants.min_duration_s = p.get<double>("min_duration_s");
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
-    options_.plants.floor = parse_floor(p.get<std::string>("floor"));
+    options_.plants.floor = retarget::parse_floor(p.get<std::string>("floor"));
   }
 
   void run(RunContext& ctx) const override {

@@ -7,6 +7,7 @@
 
 #include "kg/graph/atomic_file.hpp"
 #include "kg/graph/error.hpp"
+#include "kg/graph/yaml_reader.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retime/contacts.hpp"
 
@@ -17,35 +18,23 @@ namespace {
 using graph::Error;
 using graph::SourceLocation;
 
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
-class Reader {
+class Reader : public graph::YamlReader {
  public:
-  Reader(std::string file, const motion::Motion& motion) : file_(std::move(file)), motion_(motion) {}
+  Reader(std::string file, const motion::Motion& motion) : YamlReader(std::move(file)), motion_(motion) {}
 
-  Contacts read(const std::string& text) {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::Exception& e) {
-      fail("malformed YAML: " + e.msg, e.mark);
-    }
-    if (!root.IsDefined() || root.IsNull())
-      throw Error("empty contact file (expected 'version: 1')", {file_, 1, 1});
+  Contacts read(const std::string& source) {
+    const YAML::Node root = load(source, "empty contact file (expected 'version: 1')");
     if (!root.IsMap()) fail("a contact file must be a map (version, patches)", root.Mark());
     check_keys(root, "", {"version", "doc", "patches"});
-    if (!root["version"]) throw Error("missing 'version: 1'", {file_, 1, 1});
-    const int version = as_int(root["version"], "version");
+    if (!root["version"]) throw Error("missing 'version: 1'", {path(), 1, 1});
+    const int version = integer(root["version"], "version");
     if (version != kContactFormatVersion)
       fail("unsupported version " + std::to_string(version) + " (this reads version 1)",
            root["version"].Mark());
-    if (root["doc"]) as_string(root["doc"], "doc");
+    if (root["doc"]) text(root["doc"], "doc");
     const YAML::Node ps = root["patches"];
-    if (!ps) throw Error("missing 'patches' (a list of contact patches)", {file_, 1, 1});
+    if (!ps) throw Error("missing 'patches' (a list of contact patches)", {path(), 1, 1});
     if (!ps.IsSequence()) fail("patches: expected a list", ps.Mark());
     std::vector<ContactPatch> patches;
     std::vector<std::vector<std::pair<int, int>>> ranges;
@@ -67,51 +56,17 @@ class Reader {
       first += patches[p].vertices.size();
     }
     Contacts c = assemble_contacts(motion_, std::move(patches), active);
-    c.source = file_;
+    c.source = path();
     return c;
   }
 
  private:
-  [[noreturn]] void fail(const std::string& message, const YAML::Mark& m) const {
-    throw Error(message,
-                m.line < 0 ? SourceLocation{file_, 0, 0} : SourceLocation{file_, m.line + 1, m.column + 1});
-  }
+  double as_double(const YAML::Node& n, const std::string& what) const { return number(n, what, true); }
 
-  void check_keys(const YAML::Node& map, const std::string& path,
-                  const std::vector<std::string>& allowed) const {
-    for (auto it = map.begin(); it != map.end(); ++it) {
-      const std::string key = it->first.Scalar();
-      if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
-      std::string msg = "unknown key '" + (path.empty() ? key : path + "." + key) + "'";
-      const std::string near = graph::nearest_name(key, allowed);
-      if (!near.empty()) msg += " (nearest: '" + near + "')";
-      fail(msg + "; allowed: " + join(allowed), it->first.Mark());
-    }
-  }
 
-  double as_double(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected a number", n.Mark());
-    try {
-      return n.as<double>();
-    } catch (const YAML::Exception&) {
-      fail(what + ": expected a number, got '" + n.Scalar() + "'", n.Mark());
-    }
-  }
-  int as_int(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected an integer", n.Mark());
-    try {
-      return n.as<int>();
-    } catch (const YAML::Exception&) {
-      fail(what + ": expected an integer, got '" + n.Scalar() + "'", n.Mark());
-    }
-  }
-  std::string as_string(const YAML::Node& n, const std::string& what) const {
-    if (!n.IsScalar()) fail(what + ": expected a string", n.Mark());
-    return n.Scalar();
-  }
 
   int joint(const YAML::Node& n, const std::string& what) const {
-    const std::string name = as_string(n, what);
+    const std::string name = text(n, what);
     const motion::Skeleton& sk = *motion_.skeleton;
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
@@ -143,7 +98,7 @@ class Reader {
         if (!std::isfinite(t) || t < 0) fail(what + ": a time must be finite and >= 0 s", x.Mark());
         ends[i] = static_cast<int>(std::lround(t * motion_.fps));
       } else {
-        ends[i] = as_int(x, what);
+        ends[i] = integer(x, what);
       }
     }
     if (ends[0] > ends[1])
@@ -165,7 +120,7 @@ class Reader {
     if (!n["joint"]) fail(path + ": missing 'joint'", n.Mark());
     ContactPatch p;
     const int j = joint(n["joint"], path + ".joint");
-    p.name = n["name"] ? as_string(n["name"], path + ".name") : motion_.skeleton->joint(j).name;
+    p.name = n["name"] ? text(n["name"], path + ".name") : motion_.skeleton->joint(j).name;
     for (const ContactPatch& other : before)
       if (other.name == p.name)
         fail(path + ".name: a patch named '" + p.name + "' is already defined" +
@@ -194,7 +149,6 @@ class Reader {
     return p;
   }
 
-  std::string file_;
   const motion::Motion& motion_;
 };
 

@@ -1,10 +1,11 @@
 #include "kg/retime/dynamics.hpp"
 
-#include "kg/retime/body_build.hpp"
-
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "kg/motion/rotations.hpp"
+#include "kg/retime/body_build.hpp"
 
 namespace kg::retime {
 
@@ -12,20 +13,6 @@ namespace {
 
 void check_dynamics_body(const BodyModel& body, const char* who);  // below
 
-// M <- M * R_axis(angle), touching only the two columns the rotation mixes (as kinematics.cpp).
-inline void post_rotate(Eigen::Matrix3d& M, int axis, double c, double s) {
-  const int l = axis == 2 ? 0 : axis + 1;
-  const int m = axis == 0 ? 2 : axis - 1;
-  const Eigen::Vector3d cl = M.col(l);
-  const Eigen::Vector3d cm = M.col(m);
-  M.col(l) = c * cl + s * cm;
-  M.col(m) = c * cm - s * cl;
-}
-
-inline bool is_identity(const Eigen::Matrix3d& A) {
-  return A(0, 0) == 1 && A(1, 1) == 1 && A(2, 2) == 1 && A(0, 1) == 0 && A(0, 2) == 0 && A(1, 0) == 0 &&
-         A(1, 2) == 0 && A(2, 0) == 0 && A(2, 1) == 0;
-}
 
 std::string str(int i) {
   return std::to_string(i);
@@ -191,7 +178,7 @@ void compute_frame_kinematics(const BodyModel& body, motion::FrameRef q, FrameKi
     const Vec3<double> r = vec3(p - out.origin);
     Eigen::Matrix3d R = Rp;
     if (rotated) {
-      const bool plain = is_identity(jt.axis);
+      const bool plain = motion::is_identity(jt.axis);
       if (!plain) R = Rp * jt.axis;
       for (std::size_t i = 0; i < jt.channels.size(); ++i) {
         const motion::ChannelKind kind = jt.channels[i].kind;
@@ -201,7 +188,7 @@ void compute_frame_kinematics(const BodyModel& body, motion::FrameRef q, FrameKi
         const Vec3<double> w = vec3(R.col(a));
         out.axis[static_cast<std::size_t>(c)] = {w, cross(r, w)};
         const double x = values[c];
-        post_rotate(R, a, std::cos(x), std::sin(x));
+        motion::post_rotate(R, a, std::cos(x), std::sin(x));
       }
       if (!plain) R = R * jt.axis.transpose();
     }

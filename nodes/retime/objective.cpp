@@ -1,8 +1,12 @@
 #include "kg/retime/objective.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include <Eigen/Eigenvalues>
 
 #include "kg/retime/force_model.hpp"
 
@@ -143,6 +147,31 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
           .d_p = (c1.value - c0.value) * fps_,
           .d_pddot = (1 - u) * c0.d_a + u * c1.d_a,
           .d_pdot2 = (1 - u) * c0.d_b + u * c1.d_b};
+}
+
+Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides, double extent) const {
+  const FrameHull& hull = hulls_.frames.at(static_cast<std::size_t>(frame));
+  if (hull.status != HullStatus::Flight || weights_.alpha <= 0) return hull.vertices;
+  const Quadratic& q = flight_[static_cast<std::size_t>(frame)];
+  // Q(x) = x^T A x + g^T x + q5 with x = (p̈, ṗ²); its minimum m and the ellipse Q <= α tol².
+  Eigen::Matrix2d A;
+  A << q[1], q[2] / 2, q[2] / 2, q[0];
+  const Eigen::Vector2d g(q[4], q[3]);
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(A);
+  const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff()));
+  const Eigen::Matrix2d V = eig.eigenvectors();
+  const Eigen::Vector2d m = -0.5 * (V * (V.transpose() * g).cwiseQuotient(lambda));
+  const double level = weights_.alpha * tolerance * tolerance - kg::retime::evaluate(q, m.x(), m.y());
+  Polygon out;
+  if (!(level > 0)) return hull.vertices;
+  for (int k = 0; k < sides; ++k) {
+    const double angle = 2 * std::numbers::pi * k / sides;
+    Eigen::Vector2d u(std::cos(angle), std::sin(angle));
+    for (int i = 0; i < 2; ++i) u[i] *= std::min(std::sqrt(level / lambda[i]), extent);
+    out.push_back(m + V * u);
+  }
+  if (V.determinant() < 0) std::reverse(out.begin(), out.end());  // keep counter-clockwise
+  return out;
 }
 
 BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot_squared, double tolerance) const {

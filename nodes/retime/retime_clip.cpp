@@ -86,8 +86,9 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
 
   std::vector<Polygon> polygons;
   auto time_optimal_playback = [&] {
+    // Flight frames admit the timings whose root residual stays within a tenth of the weight.
     if (polygons.empty())
-      for (const FrameHull& h : hulls.frames) polygons.push_back(h.vertices);
+      for (int f = 0; f < frames; ++f) polygons.push_back(objective.admissible_region(f, 0.1));
     return time_optimal(polygons, fps, options.time_optimal);
   };
   std::ostringstream message;

@@ -14,6 +14,7 @@
 #include "kg/retime/hulls.hpp"
 #include "kg/retime/playback.hpp"
 #include "kg/retime/retime_clip.hpp"
+#include "kg/retime/torque_limits.hpp"
 
 namespace kg::retime {
 namespace {
@@ -91,6 +92,71 @@ NodeType dynamics_node_type() {
   return {std::move(spec), [](const Params& p) { return std::make_unique<DynamicsNode>(p); }};
 }
 
+class TorqueLimitsNode final : public graph::Node {
+ public:
+  explicit TorqueLimitsNode(const Params& p) {
+    options_.margin = p.get<double>("margin");
+    options_.floor = p.get<double>("floor");
+    options_.symmetric = p.get<bool>("symmetric");
+  }
+
+  void run(RunContext& ctx) const override {
+    const BodyModel& body = ctx.input<BodyModel>("body");
+    if (options_.margin == 0) {  // the body's own limits (from its file, or none)
+      ctx.log("margin 0: the body's own torque limits are kept");
+      ctx.output("body", body);
+      return;
+    }
+    const Contacts& contacts = ctx.input<Contacts>("contacts");
+    const PathTorques& torques = ctx.input<PathTorques>("torques");
+    const TorqueLimitEstimate estimate = estimate_torque_limits(body, contacts, torques.frames, options_);
+    for (const std::string& note : estimate.notes) ctx.log(note);
+    ctx.report("frames_used", static_cast<std::int64_t>(estimate.count(FrameUse::Original) +
+                                                         estimate.count(FrameUse::Nearest) +
+                                                         estimate.count(FrameUse::Flight)));
+    ctx.report("frames_skipped", static_cast<std::int64_t>(estimate.count(FrameUse::Skipped)));
+    double largest = 0;
+    for (Eigen::Index c = 0; c < estimate.body.torque_max.size(); ++c)
+      if (std::isfinite(estimate.body.torque_max[c])) largest = std::max(largest, estimate.body.torque_max[c]);
+    ctx.report("largest_limit", largest);
+    ctx.output("body", estimate.body);
+  }
+
+ private:
+  TorqueLimitOptions options_;
+};
+
+NodeType torque_limits_node_type() {
+  NodeSpec spec{
+      .type = "retime.torque_limits",
+      .version = 1,
+      .doc = "Torque limits observed in the clip itself, as McCann et al. set theirs (§4): each actuated channel "
+             "may exert `margin` times the largest generalised force the clip needs at its original timing "
+             "(with the least contact force that explains it), at least `floor`. With margin >= 1 the original "
+             "timing stays inside every hull it was inside before. margin 0 keeps the body's own limits.",
+      .inputs = {{"body", "kg.BodyModel", true, "the body whose limits are set"},
+                 {"contacts", "kg.Contacts", true, "the clip's contacts"},
+                 {"torques", "kg.PathTorques", true, "the clip's torque coefficients (retime.dynamics)"}},
+      .outputs = {{"body", "kg.BodyModel", true, "the same body with torque_min/torque_max set"}},
+      .params = {{.name = "margin",
+                  .type = ParamType::Float,
+                  .default_value = 1.5,
+                  .doc = "limit = margin x the observed peak per channel; 0: keep the body's limits",
+                  .min = 0.0,
+                  .max = 1e6},
+                 {.name = "floor",
+                  .type = ParamType::Float,
+                  .default_value = 5.0,
+                  .doc = "N m: the least limit of any actuated channel (one that never works still may)",
+                  .min = 0.0,
+                  .max = 1e9},
+                 {.name = "symmetric",
+                  .type = ParamType::Bool,
+                  .default_value = false,
+                  .doc = "left and right joints share the larger of their limits"}}};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<TorqueLimitsNode>(p); }};
+}
+
 class HullsNode final : public graph::Node {
  public:
   explicit HullsNode(const Params& p)
@@ -108,6 +174,14 @@ class HullsNode final : public graph::Node {
     if (contacts.frame_count() != source.frame_count())
       throw std::invalid_argument("the contacts have " + std::to_string(contacts.frame_count()) +
                                   " frames and the torques " + std::to_string(source.frame_count()));
+    bool touches = false;
+    for (const ContactFrame& frame : contacts.frames) touches = touches || !frame.points.empty();
+    if (!touches)
+      throw std::invalid_argument(
+          "no frame of the clip touches anything (" + std::to_string(contacts.frame_count()) +
+          " frames of flight): nothing could have moved its root, so no timing of it is physical. Check the "
+          "feet the contacts found and their thresholds (retime.contacts: height_threshold, speed_threshold, "
+          "floor), or give the contacts in a file (path)");
     body.gravity = gravity_from(gravity_, body.gravity);
     // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
     PathTorques edited{source.skeleton, source.fps, {}, "", {}};
@@ -406,6 +480,7 @@ namespace kg {
 std::vector<graph::NodeType> retime_node_types() {
   std::vector<graph::NodeType> out;
   out.push_back(retime::dynamics_node_type());
+  out.push_back(retime::torque_limits_node_type());
   out.push_back(retime::hulls_node_type());
   out.push_back(retime::retime_node_type());
   return out;

@@ -172,7 +172,7 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
        "    frames: [1, 2, 3]\n",
        "frames: expected [first, last], got 3 entries"},
       {"version: 1\nconstraints:\n  - kind: position\n    pionts: [{joint: LeftFoot}]\n",
-       "c.yaml:4:5: unknown key 'constraints[0].pionts' (nearest: 'points')"},
+       "c.yaml:4:5: unknown key 'constraints[0].pionts' (did you mean 'points'?)"},
       {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0]\n"
        "    frames: [1, 2]\n",
        "c.yaml:3:5: constraints[0]: constraint 'position 0' (position): expects params [x y z] or [x y z mx my mz], "
@@ -185,7 +185,7 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
        "give only one of frames, at_frames, times, at_times"},
       {"version: 2\n", "c.yaml:1:10: unsupported version 2"},
       {"constraints: []\n", "missing 'version: 1'"},
-      {"version: 1\nconstraint: []\n", "unknown key 'constraint' (nearest: 'constraints')"},
+      {"version: 1\nconstraint: []\n", "unknown key 'constraint' (did you mean 'constraints'?)"},
       {"version: 1\nconstraints:\n  - kind: parameter_range\n    channels: [LeftLeg.Xrot]\n    params: [0, 1]\n"
        "    frames: [0, 1]\n",
        "joint 'LeftLeg' has no channel 'Xrot' (it has: Zrotation, Xrotation, Yrotation)"},

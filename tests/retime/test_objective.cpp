@@ -90,7 +90,7 @@ TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every se
   const BoxAndFlight c = box_and_flight();
   const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 1, .beta = 2, .torque_scale = 0.5});
   for (int f : {3, 20}) {
-    for (const Eigen::Vector2d x : {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
+    for (const Eigen::Vector2d& x : {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
       const Eigen::VectorXd tau = c.torques[static_cast<std::size_t>(f)].at(x.y(), x.x(), c.hulls.gravity);
       CHECK(objective.parts(f, x.x(), x.y()).torque == Approx(2 * tau.squaredNorm() / 0.25));
     }

@@ -75,6 +75,23 @@ Eigen::Matrix3d joint_rotation(const Skeleton& skeleton, int joint,
 void set_joint_rotation(const Skeleton& skeleton, int joint, const Eigen::Matrix3d& R,
                         Eigen::Ref<Eigen::RowVectorXd> frame);
 
+// M <- M * axis_rotation(axis, angle) given c = cos(angle), s = sin(angle), touching only the two
+// columns the rotation mixes (the hot loops of forward kinematics and dynamics).
+inline void post_rotate(Eigen::Matrix3d& M, int axis, double c, double s) {
+  const int l = axis == 2 ? 0 : axis + 1;
+  const int m = axis == 0 ? 2 : axis - 1;
+  const Eigen::Vector3d cl = M.col(l);
+  const Eigen::Vector3d cm = M.col(m);
+  M.col(l) = c * cl + s * cm;
+  M.col(m) = c * cm - s * cl;
+}
+
+// Exactly the identity (an ASF axis frame left at 0 0 0 skips its two products).
+inline bool is_identity(const Eigen::Matrix3d& A) {
+  return A(0, 0) == 1 && A(1, 1) == 1 && A(2, 2) == 1 && A(0, 1) == 0 && A(0, 2) == 0 && A(1, 0) == 0 &&
+         A(1, 2) == 0 && A(2, 0) == 0 && A(2, 1) == 0;
+}
+
 // Spherical interpolation a -> b at u in [0, 1] along the shorter arc (b's sign flipped when the
 // two lie in opposite hemispheres). Unit quaternions in, unit quaternion out.
 Eigen::Quaterniond slerp_shortest(const Eigen::Quaterniond& a, const Eigen::Quaterniond& b, double u);

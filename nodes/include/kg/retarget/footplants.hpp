@@ -74,6 +74,13 @@ struct FootplantDetection {
   int count(int point) const;     // plants of one point
 };
 
+// Node-parameter text for the options above: "LeftFoot, RightToeBase/end" gives the names,
+// trimmed, empty items dropped.
+std::vector<std::string> split_names(const std::string& text);
+// A `floor` parameter: "auto" or "" gives NaN (estimated), else a height in metres. Throws
+// std::invalid_argument naming the text otherwise.
+double parse_floor(const std::string& text);
+
 // A point by the syntax of FootplantOptions::points ("Joint", "Joint/end", "Joint[x y z]") on
 // `character`. Throws std::invalid_argument for an unknown joint (with the nearest name), a
 // missing End Site or a malformed offset; `who` starts the messages ("footplants").

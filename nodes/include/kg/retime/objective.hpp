@@ -29,6 +29,7 @@
 #include "kg/retime/hulls.hpp"
 #include "kg/retime/path_torques.hpp"
 #include "kg/retime/retimer.hpp"
+#include "kg/retime/time_optimal.hpp"
 
 namespace kg::retime {
 
@@ -80,6 +81,11 @@ class BakedObjective final : public PathObjective {
     bool inside = false;
   };
   Parts parts(int frame, double pddot, double pdot_squared, double tolerance = 1e-9) const;
+  // For a flight frame, the timings whose root residual stays within `tolerance` of the body's
+  // weight: an ellipse about the least-squares point (a polygon of `sides` vertices,
+  // counter-clockwise; an extent the rows do not bound is cut at `extent` plane units). For other
+  // frames, the hull's vertices.
+  Polygon admissible_region(int frame, double tolerance, int sides = 16, double extent = 100) const;
   const Quadratic& quadratic(int frame, int sector) const {
     return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
   }
