@@ -527,9 +527,21 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
                              "output=" + output.string(), "report=" + report.string()});
     INFO(show(r));
     CHECK(r.code == 1);
-    CHECK_THAT(r.err, Catch::Contains("node retime (retime.retime) failed") &&
-                          Catch::Contains("output frames inside their hulls"));
+    const std::string failure = failure_line(r.err);
+    CHECK_THAT(failure, Catch::Contains("node retime (retime.retime) failed") &&
+                            Catch::Contains("output frames inside their hulls") &&
+                            Catch::Contains("shorter than any feasible playback"));
     nothing_written();
+    // The shortest feasible playback: no shorter than the flight at source speed plus the stands
+    // at the hulls' box (ṗ² <= 16, ṗ <= 4), and no longer than the half that was feasible.
+    const std::string key = "the shortest lasts ";
+    const std::size_t at = failure.find(key);
+    REQUIRE(at != std::string::npos);
+    const double shortest = std::stod(failure.substr(at + key.size()));
+    const Source source = source_at_30(hop);
+    INFO("shortest " << shortest << " s");
+    CHECK(shortest >= kHopFlight + 2 * kHopStand / 4 - 2 / kFps);
+    CHECK(shortest <= 0.5 * source.duration);
   }
 
   SECTION(
