@@ -472,7 +472,7 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
         kRetime, {"input=" + glide.string(), "output=" + output.string(), "report=" + report.string()});
     INFO(show(r));
     CHECK(r.code == 1);
-    CHECK_THAT(failure_line(r.err), Catch::Contains("node hulls (retime.hulls) failed") &&
+    CHECK_THAT(failure_line(r.err), Catch::Contains("(retime.hulls) failed") &&
                                         Catch::Contains("no frame of the clip touches anything") &&
                                         Catch::Contains("retime.contacts"));
     nothing_written();
