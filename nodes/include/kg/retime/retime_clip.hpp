@@ -56,8 +56,9 @@ struct ClipRetime {
   double torque_scale = 1;               // N m
   // Output frames (at the source's rate over the output duration) whose (p̈, ṗ²) lies within
   // inside_tolerance of the hull of the source frame they play, over all output frames; and of
-  // those playing frames with an empty polytope (flight, infeasible), the share within the same
-  // tolerance of their point.
+  // those playing frames with an empty polytope, the share at their closest point: for flight, a
+  // root residual within a tenth of the body's weight of its least; otherwise within
+  // inside_tolerance of the point.
   double share_inside = 0;
   double share_at_point = 1;
   int output_frames = 0;
