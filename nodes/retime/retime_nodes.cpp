@@ -286,7 +286,7 @@ class RetimeNode final : public graph::Node {
     options_.mode = p.get<std::string>("mode") == "time_optimal" ? RetimeMode::TimeOptimal : RetimeMode::Optimise;
     options_.alpha = p.get<double>("alpha");
     options_.beta = p.get<double>("beta");
-    options_.solve.knot_spacing = p.get<double>("knot_spacing");
+    options_.solve.knot_spacing = options_.time_optimal.knot_spacing = p.get<double>("knot_spacing");
     options_.inside_tolerance = p.get<double>("inside_tolerance");
   }
 
@@ -344,7 +344,7 @@ class RetimeNode final : public graph::Node {
         w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
         w.field("source_duration", motion.duration());
         w.field("duration", r.warp.duration);
-        w.field("converged", r.solve.converged);
+        w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
         w.field("iterations", r.solve.iterations);
         w.field("solve_seconds", r.solve.seconds);
         w.field("objective_feasibility", r.feasibility);

@@ -142,6 +142,12 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
     result.message = y.size() == 0 ? "the constraints fix the warp" : summary.message;
     const int needed = grid_samples(warp, objective.source_fps(), options.samples_per_frame);
     if (needed <= samples) break;
+    if (round == 3) {  // no round left to solve on a finer grid
+      result.converged = false;
+      result.message += "; the playback sped up past the grid's quarter-frame samples four times (" +
+                        std::to_string(needed) + " samples needed, " + std::to_string(samples) + " used)";
+      break;
+    }
     result.message += "; grid refined from " + std::to_string(samples) + " to " + std::to_string(needed) + " samples";
     samples = needed;
   }

@@ -55,6 +55,8 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
   const int frames = static_cast<int>(hulls.size());
   if (frames < 2) throw std::invalid_argument("time-optimal retiming: " + std::to_string(frames) + " frames (expected >= 2)");
   if (!(fps > 0) || !std::isfinite(fps)) throw std::invalid_argument("time-optimal retiming: fps must be > 0");
+  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing) || !(options.point_tolerance >= 0))
+    throw std::invalid_argument("time-optimal retiming: knot spacing must be > 0 and the point tolerance >= 0");
   std::vector<Polygon> sets(static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) {
     if (hulls[static_cast<std::size_t>(i)].empty())
@@ -128,6 +130,13 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
   for (int i = 0; i < frames; ++i) source_times[static_cast<std::size_t>(i)] = i / fps;
   const int segments = std::max(1, static_cast<int>(std::ceil(t / options.knot_spacing - 1e-9)));
   result.warp = fit_warp(result.output_times, source_times, segments);
+  if (!result.warp.strictly_increasing()) {
+    result.feasible = false;
+    result.message = "the time-optimal profile (" + std::to_string(t) +
+                     " s) has no strictly increasing spline fit with knots every " + std::to_string(t / segments) +
+                     " s: playback nearly stops somewhere";
+    return result;
+  }
   result.message = "shortest feasible duration " + std::to_string(t) + " s";
   return result;
 }

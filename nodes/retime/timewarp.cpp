@@ -148,31 +148,30 @@ TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<dou
   if (output_times.size() != source_times.size() || output_times.size() < 2)
     throw std::invalid_argument("time warp fit: " + std::to_string(output_times.size()) + " output times and " +
                                 std::to_string(source_times.size()) + " source times (expected equal, >= 2)");
+  if (output_times.front() != 0 || source_times.front() != 0)
+    throw std::invalid_argument("time warp fit: the samples must start at output 0, source 0");
+  for (std::size_t k = 1; k < output_times.size(); ++k)
+    if (!(output_times[k] > output_times[k - 1]) || !(source_times[k] >= source_times[k - 1]))
+      throw std::invalid_argument("time warp fit: sample " + std::to_string(k) + " does not follow sample " +
+                                  std::to_string(k - 1) + " (output times must increase, source times not decrease)");
   const double duration = output_times.back(), source_duration = source_times.back();
   check_sizes(source_duration, duration, segments);
-  const int controls = segments + 3;
-  // Normal equations of the fit, bordered by the two end rows (KKT).
+  // The playback through the samples, linear between them and extended linearly past the ends.
+  auto linear = [&](double t) {
+    const auto it = std::upper_bound(output_times.begin(), output_times.end(), t);
+    const std::size_t k = std::clamp<std::size_t>(static_cast<std::size_t>(it - output_times.begin()), 1,
+                                                  output_times.size() - 1);
+    const double t0 = output_times[k - 1], t1 = output_times[k];
+    return source_times[k - 1] + (t - t0) * (source_times[k] - source_times[k - 1]) / (t1 - t0);
+  };
+  // Controls at their sites sample that monotone curve, so the spline is monotone too (a B-spline
+  // never varies more than its controls); the two ends are then corrected onto their rows.
+  const double h = duration / segments;
+  Eigen::VectorXd c(segments + 3);
+  for (int j = 0; j < segments + 3; ++j) c[j] = linear((j - 1) * h);
   const WarpConstraints ends = warp_constraints(source_duration, duration, segments, {});
-  Eigen::MatrixXd kkt = Eigen::MatrixXd::Zero(controls + 2, controls + 2);
-  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(controls + 2);
-  for (std::size_t k = 0; k < output_times.size(); ++k) {
-    const WarpSample s = basis(duration, segments, output_times[k]);
-    for (int i = 0; i < 4; ++i) {
-      rhs[s.first + i] += s.weight[i] * source_times[k];
-      for (int j = 0; j < 4; ++j) kkt(s.first + i, s.first + j) += s.weight[i] * s.weight[j];
-    }
-  }
-  // A whisper of smoothness keeps controls that no sample reaches determined.
-  for (int j = 0; j + 1 < controls; ++j) {
-    const double w = 1e-9;
-    kkt(j, j) += w, kkt(j + 1, j + 1) += w, kkt(j, j + 1) -= w, kkt(j + 1, j) -= w;
-  }
-  kkt.block(controls, 0, 2, controls) = ends.A;
-  kkt.block(0, controls, controls, 2) = ends.A.transpose();
-  rhs.tail(2) = ends.b;
-  const Eigen::VectorXd solution = kkt.fullPivLu().solve(rhs);
-  TimeWarp warp{duration, source_duration, std::vector<double>(solution.data(), solution.data() + controls)};
-  return warp;
+  c += ends.A.transpose() * (ends.A * ends.A.transpose()).fullPivLu().solve(ends.b - ends.A * c);
+  return TimeWarp{duration, source_duration, std::vector<double>(c.data(), c.data() + c.size())};
 }
 
 }  // namespace kg::retime

@@ -51,3 +51,22 @@ TEST_CASE("a point hull admits a box around it, so a ballistic stretch passes at
   REQUIRE(r.feasible);
   for (int i = 10; i < 20; ++i) CHECK(r.pdot_squared[static_cast<std::size_t>(i)] == Approx(1).epsilon(0.051));
 }
+
+TEST_CASE("a time-optimal playback that nearly stops still gives an increasing warp within the clip") {
+  // Frames 28-32 admit only ṗ² <= 0.01: the frames there lie far apart in output time, and a
+  // spline with knots closer than that swung backwards before the knots followed the gaps.
+  std::vector<Polygon> hulls;
+  for (int i = 0; i <= 60; ++i) hulls.push_back(box(-20, 20, 0, i >= 28 && i <= 32 ? 0.01 : 16));
+  const TimeOptimalResult r = time_optimal(hulls, 30, {});
+  REQUIRE(r.feasible);
+  CHECK(r.warp.strictly_increasing());
+  for (double t = 0; t <= r.duration; t += 0.01) {
+    CHECK(r.warp.at(t) >= -1e-9);
+    CHECK(r.warp.at(t) <= 2 + 1e-9);
+  }
+}
+
+TEST_CASE("fit_warp refuses samples that do not start at the origin or do not increase") {
+  CHECK_THROWS_WITH(fit_warp({0, 0.5, 1}, {0.5, 1, 1.5}, 4), Catch::Matchers::Contains("start at output 0"));
+  CHECK_THROWS_WITH(fit_warp({0, 0.5, 0.4}, {0, 1, 1.5}, 4), Catch::Matchers::Contains("does not follow"));
+}

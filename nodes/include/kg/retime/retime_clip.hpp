@@ -62,7 +62,10 @@ struct ClipRetime {
   double share_inside = 0;
   double share_at_point = 1;
   int output_frames = 0;
-  bool feasible = true;                  // every output frame inside (or at its point)
+  // Every output frame playing a frame with a feasible polytope lies inside its hull. Frames
+  // without one (flight, not exactly physical) are reported by share_at_point, not counted here:
+  // captured flights scatter about their least-squares points.
+  bool feasible = true;
   std::string message;                   // one paragraph for logs
 };
 

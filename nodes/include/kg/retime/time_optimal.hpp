@@ -29,7 +29,7 @@ using Polygon = std::vector<Eigen::Vector2d>;
 
 struct TimeOptimalOptions {
   double point_tolerance = 0.05;  // relative half-width in ṗ² of the box around a point hull
-  double knot_spacing = 0.1;      // output seconds between the fitted warp's controls
+  double knot_spacing = 0.1;      // output seconds between the fitted warp's controls (> 0)
 };
 
 struct TimeOptimalResult {
@@ -39,7 +39,8 @@ struct TimeOptimalResult {
   std::vector<double> pdot_squared;   // per source frame, the time-optimal ṗ²
   std::vector<double> output_times;   // per source frame, when it plays (output seconds)
   double duration = 0;                // output seconds: the shortest feasible duration
-  TimeWarp warp;                      // the profile fitted by a spline (fit_warp)
+  TimeWarp warp;                      // the profile fitted by a spline (fit_warp); a fit that does
+                                      // not increase strictly makes the result infeasible
 };
 
 // One polygon per source frame (>= 2 frames), fps > 0. Throws std::invalid_argument for an empty

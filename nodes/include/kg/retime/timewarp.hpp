@@ -62,9 +62,9 @@ struct WarpConstraints {
   Eigen::VectorXd b;  // source seconds
 };
 
-// Throws std::invalid_argument naming the pin when a pin lies outside [0, duration] x [0,
-// source_duration], two pins share an output time, or pins run backwards (a later output time
-// playing an earlier source moment: no increasing p(t) can meet them).
+// Throws std::invalid_argument naming the pin when a pin lies outside the open (0, duration) x (0,
+// source_duration) (the ends are kept already), two pins share an output time, or pins run
+// backwards (a later output time playing an earlier source moment: no increasing p(t) meets them).
 WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
 
 // A strictly increasing warp meeting the constraints: piecewise-constant speed between the ends
@@ -72,10 +72,14 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
 // (naming the closest pair of pins) when `segments` is too coarse to pass the pins increasingly.
 TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
 
-// The warp of `segments` segments over [0, duration] closest in least squares to the playback
-// samples (output_times[i], source_times[i]) with the ends kept exactly (the first and last
-// sample's source times at 0 and duration). Sizes must agree (>= 2 samples); throws
-// std::invalid_argument otherwise. The result need not increase strictly if the samples do not.
+// A warp of `segments` segments through the playback samples (output_times[i], source_times[i]),
+// which start at (0, 0) and increase: its controls sample the piecewise-linear playback at their
+// sites, so it follows the samples within the curvature a knot spacing rounds off and never runs
+// backwards where they do not; duration and source duration are the last sample's, and p(0) = 0
+// and p(duration) = source duration hold exactly. Throws std::invalid_argument for sizes that
+// disagree, fewer than 2 samples, or samples that do not start at (0, 0) or do not increase.
+// Callers needing strict increase check strictly_increasing() (samples that stop give a flat
+// stretch).
 TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments);
 
 }  // namespace kg::retime
