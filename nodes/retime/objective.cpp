@@ -92,7 +92,8 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
       }
       // The weight: what the root's rows need to hold the body still.
       const double weight = std::max(r0.norm(), 1e-9);
-      Quadratic q = bake_quadratic(r0, ra, rb, Eigen::VectorXd::Zero(n), weights.alpha / (weight * weight));
+      // Unweighted (|r|² / W²): α multiplies it where it is used, so α = 0 keeps the region.
+      Quadratic q = bake_quadratic(r0, ra, rb, Eigen::VectorXd::Zero(n), 1 / (weight * weight));
       flight_least_[f] = kg::retime::evaluate(q, hull.vertices[0].x(), hull.vertices[0].y());
       q[5] -= flight_least_[f];  // 0 at the closest point
       flight_[f] = q;
@@ -118,9 +119,10 @@ BakedObjective::FrameCost BakedObjective::frame_cost(int frame, double a, double
   FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4], 2 * q[0] * b + q[2] * a + q[3]};
   if (hull.status == HullStatus::Flight) {
     const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
-    cost.value += kg::retime::evaluate(r, a, b);
-    cost.d_a += 2 * r[1] * a + r[2] * b + r[4];
-    cost.d_b += 2 * r[0] * b + r[2] * a + r[3];
+    const double alpha = weights_.alpha;
+    cost.value += alpha * kg::retime::evaluate(r, a, b);
+    cost.d_a += alpha * (2 * r[1] * a + r[2] * b + r[4]);
+    cost.d_b += alpha * (2 * r[0] * b + r[2] * a + r[3]);
     return cost;
   }
   // Inside the sector's fan triangle is inside the hull: no nearest point to find.
@@ -159,7 +161,7 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
 Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides, double extent) const {
   const FrameHull& hull = hulls_.frames.at(static_cast<std::size_t>(frame));
   if (hull.status == HullStatus::Feasible) return hull.vertices;
-  if (hull.status == HullStatus::Infeasible || weights_.alpha <= 0) return {};
+  if (hull.status == HullStatus::Infeasible) return {};
   const Quadratic& q = flight_[static_cast<std::size_t>(frame)];
   // Q(x) = x^T A x + g^T x + q5 with x = (p̈, ṗ²); its minimum m and the ellipse Q <= α tol².
   Eigen::Matrix2d A;
@@ -169,7 +171,7 @@ Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides
   const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff()));
   const Eigen::Matrix2d V = eig.eigenvectors();
   const Eigen::Vector2d m = -0.5 * (V * (V.transpose() * g).cwiseQuotient(lambda));
-  const double level = weights_.alpha * tolerance * tolerance -
+  const double level = tolerance * tolerance -
                        (kg::retime::evaluate(q, m.x(), m.y()) + flight_least_[static_cast<std::size_t>(frame)]);
   Polygon out;
   if (!(level > 0)) return out;
@@ -193,7 +195,7 @@ BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot
   hint = sector;
   const HullPoint c = closest_point(hull, x, hint);
   out.feasibility = hull.status == HullStatus::Flight
-                        ? kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
+                        ? weights_.alpha * kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
                         : weights_.alpha * c.distance_squared;
   out.inside = c.distance_squared <= tolerance * tolerance;
   return out;

@@ -150,12 +150,11 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
     const bool near = c.distance_squared <= options.inside_tolerance * options.inside_tolerance;
     if (hull.status == HullStatus::Feasible) {
       ++feasible_frames, inside += near;
-    } else if (hull.status == HullStatus::Flight && options.alpha > 0) {
+    } else if (hull.status == HullStatus::Flight) {
       // A flight's point is as good as its rows: the residual may exceed its least by a tenth of
-      // the weight (the baked flight term is α times that excess squared over the weight²).
+      // the weight.
       ++point_frames;
-      at_point += objective.parts(f, s.pddot, s.pdot * s.pdot).feasibility <= options.alpha * kFlightTolerance *
-                                                                                  kFlightTolerance;
+      at_point += objective.flight_excess(f, s.pddot, s.pdot * s.pdot) <= kFlightTolerance * kFlightTolerance;
     } else {
       ++point_frames, at_point += near;
     }

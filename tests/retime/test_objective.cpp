@@ -96,6 +96,10 @@ TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every se
     }
   }
   CHECK(objective.parts(3, 0, 1).inside);
+  // The flight's admissible timings do not depend on α: with α = 0 the region is still there.
+  const BakedObjective no_alpha(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 0, .beta = 1});
+  CHECK(no_alpha.admissible_region(20, 0.1).size() == 16);
+  CHECK(no_alpha.flight_excess(20, 0, 1.5) == Approx(0.25));
   CHECK_FALSE(objective.parts(20, 0, 1.5).inside);
   CHECK(objective.parts(20, 0, 1.5).feasibility == Approx(0.25));
 }

@@ -87,6 +87,10 @@ class BakedObjective final : public PathObjective {
   // even the least-squares point leaves more (a contact the detection missed). For a feasible
   // frame, the hull's vertices; for an infeasible one, empty (no timing of it is physical).
   Polygon admissible_region(int frame, double tolerance, int sides = 16, double extent = 100) const;
+  // For a flight frame, (|r|² − least |r|²) / W² at (p̈, ṗ²), whatever α; 0 for other frames.
+  double flight_excess(int frame, double pddot, double pdot_squared) const {
+    return kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared);
+  }
   const Quadratic& quadratic(int frame, int sector) const {
     return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
   }
@@ -101,8 +105,8 @@ class BakedObjective final : public PathObjective {
   double fps_;
   ObjectiveWeights weights_;
   std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
-  std::vector<Quadratic> flight_;                   // per frame: the flight feasibility term (zero off flight)
-  std::vector<double> flight_least_;                // per frame: α |r|² / W² at the least-squares point
+  std::vector<Quadratic> flight_;                   // per frame: |r|² / W² − its least (zero off flight)
+  std::vector<double> flight_least_;                // per frame: |r|² / W² at the least-squares point
 };
 
 }  // namespace kg::retime
