@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <array>
 #include <atomic>
 #include <cerrno>
 #include <cstring>
@@ -44,6 +45,37 @@ fs::path temporary_beside(const fs::path& target) {
   name += '.';
   name += std::to_string(counter.fetch_add(1));
   return target.parent_path() / name;
+}
+
+// The temporaries being written, for remove_pending_temporaries in a signal handler: fixed slots,
+// each free (0), being claimed (1) or holding a path (2). A write finding no free slot is not
+// tracked, which only matters if the process is interrupted during it.
+struct PendingSlot {
+  std::atomic<int> state{0};
+  char path[4096];
+};
+std::array<PendingSlot, 64> pending_slots;
+
+PendingSlot* track_pending(const fs::path& temp) {
+  const std::string& text = temp.native();
+  if (text.size() >= sizeof(PendingSlot::path)) return nullptr;
+  for (PendingSlot& slot : pending_slots) {
+    int expected = 0;
+    if (!slot.state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(slot.path, text.c_str(), text.size() + 1);
+    slot.state.store(2);
+    return &slot;
+  }
+  return nullptr;
+}
+
+struct WrittenFiles {
+  std::mutex mutex;
+  std::vector<fs::path> paths;
+};
+WrittenFiles& written() {
+  static WrittenFiles files;
+  return files;
 }
 
 void remove_quietly(const fs::path& p) {
@@ -95,6 +127,13 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
   if (fs::is_directory(target, ec)) throw std::runtime_error(what + ": it is a directory");
 
   const fs::path temp = temporary_beside(target);
+  PendingSlot* const pending = track_pending(temp);
+  struct Untrack {
+    PendingSlot* slot;
+    ~Untrack() {
+      if (slot) slot->state.store(0);
+    }
+  } untrack{pending};
   try {
     std::ofstream os(temp, std::ios::binary | std::ios::trunc);
     if (!os) throw std::runtime_error(what + ": cannot create temporary file '" + temp.string() + "'");
@@ -125,6 +164,21 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
     remove_quietly(temp);
     throw;
   }
+  WrittenFiles& files = written();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  files.paths.push_back(target);
+}
+
+void remove_pending_temporaries() noexcept {
+  for (PendingSlot& slot : pending_slots) {
+    if (slot.state.load() == 2) ::unlink(slot.path);
+  }
+}
+
+std::vector<fs::path> written_files() {
+  WrittenFiles& files = written();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  return files.paths;
 }
 
 }  // namespace kg::graph

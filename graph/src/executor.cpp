@@ -45,13 +45,16 @@ std::string port_names(const std::vector<PortSpec>& ports) {
 class Context final : public RunContext {
  public:
   Context(const NodeInstance& node, const NodeSpec& spec, std::map<std::string, Value> inputs,
-          std::shared_ptr<const void> owner, const LogFn& log, const Registry& registry)
+          std::shared_ptr<const void> owner, const LogFn& log, const Registry& registry, bool reproducible)
       : node_(node),
         spec_(spec),
         inputs_(std::move(inputs)),
         owner_(std::move(owner)),
         log_(log),
-        registry_(registry) {}
+        registry_(registry),
+        reproducible_(reproducible) {}
+
+  bool reproducible() const override { return reproducible_; }
 
   const std::string& node_id() const override { return node_.id; }
   const Params& params() const override { return node_.params; }
@@ -105,6 +108,7 @@ class Context final : public RunContext {
   std::shared_ptr<const void> owner_;
   const LogFn& log_;
   const Registry& registry_;
+  bool reproducible_;
   std::map<std::string, Value> outputs_;
   std::vector<std::pair<std::string, Figure>> figures_;
 };
@@ -180,7 +184,8 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
     const auto start = Clock::now();
     try {
       NodePtr node = inst.node ? inst.node : registry.create_node(inst.type, inst.params);
-      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log, registry);
+      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log, registry,
+                  options.reproducible);
       node->run(ctx);
       produced[i] = std::move(ctx.outputs());
       run.figures = std::move(ctx.figures());

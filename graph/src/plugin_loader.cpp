@@ -98,6 +98,7 @@ class PluginNode final : public Node {
     }
     void report(const std::string& key, Figure value) override { base_.report(key, std::move(value)); }
     void log(const std::string& message) override { base_.log(message); }
+    bool reproducible() const override { return base_.reproducible(); }
     std::shared_ptr<const void> find_extension(const std::string& interface,
                                                const std::string& name) const override {
       return base_.find_extension(interface, name);

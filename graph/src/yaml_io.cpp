@@ -295,8 +295,8 @@ std::optional<bool> parse_bool(std::string text) {
   return std::nullopt;
 }
 
-Head read_head(const Loader& L, Variables& vars, const std::string& text,
-               const std::map<std::string, std::string>& overrides) {
+// Version, doc and the variables declared, none resolved yet.
+Head read_declarations(const Loader& L, Variables& vars, const std::string& text) {
   Head h;
   h.root = L.parse(text);
   h.top = L.entries(h.root, "", "top-level key");
@@ -358,6 +358,12 @@ Head read_head(const Loader& L, Variables& vars, const std::string& text,
       vars.declare(std::move(var));
     }
   }
+  return h;
+}
+
+Head read_head(const Loader& L, Variables& vars, const std::string& text,
+               const std::map<std::string, std::string>& overrides) {
+  Head h = read_declarations(L, vars, text);
   vars.resolve(overrides);
 
   if (const Entry* ps = Loader::find(h.top, "plugins")) {
@@ -841,6 +847,14 @@ std::vector<PluginEntry> read_graph_plugins(const fs::path& file,
   Loader L(file.string());
   Variables vars(L);
   return read_head(L, vars, text, overrides).plugins;
+}
+
+std::vector<Variable> read_graph_variables(const fs::path& file) {
+  const std::string text = read_text(file);
+  Loader L(file.string());
+  Variables vars(L);
+  read_declarations(L, vars, text);
+  return vars.declared();
 }
 
 Graph load_graph(const fs::path& file, const Registry& registry,

@@ -64,7 +64,13 @@ class MetricsNode final : public graph::Node {
     if (m.solve_seconds) ctx.report("solve_seconds", *m.solve_seconds);
 
     std::ostringstream text;
-    write_metrics_json(text, m);
+    if (ctx.reproducible()) {
+      RetargetMetrics timeless = m;
+      timeless.solve_seconds.reset();
+      write_metrics_json(text, timeless);
+    } else {
+      write_metrics_json(text, m);
+    }
     if (!path_.empty()) graph::write_file_atomically(path_, [&](std::ostream& os) { os << text.str(); });
     ctx.output("json", text.str());
   }

@@ -346,7 +346,7 @@ class RetimeNode final : public graph::Node {
         w.field("duration", r.warp.duration);
         w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
         w.field("iterations", r.solve.iterations);
-        w.field("solve_seconds", r.solve.seconds);
+        w.field("solve_seconds", ctx.reproducible() ? std::optional<double>() : r.solve.seconds);
         w.field("objective_feasibility", r.feasibility);
         w.field("objective_torque", r.torque);
         w.field("torque_scale_nm", r.torque_scale);

@@ -53,11 +53,12 @@ TEST_CASE("a good plugin loads: record, origin, nodes that run", "[plugins]") {
   CHECK(plugin.id == "kg.test_nodes");
   CHECK(plugin.version == "1.0.0");
   CHECK(plugin.path == fs::canonical(test_nodes_library()));
-  CHECK(plugin.node_count == 5);
+  CHECK(plugin.node_count == 6);
   CHECK(plugin.extension_count == 0);
   REQUIRE(loader.loaded().size() == 1);
   CHECK(registry.node_type_names() ==
-        std::vector<std::string>{"test.add", "test.constant", "test.fail", "test.print", "test.rendezvous"});
+        std::vector<std::string>{"test.add", "test.constant", "test.fail", "test.print", "test.read_number",
+                                 "test.rendezvous"});
   CHECK(registry.node_origin("test.add") == fs::canonical(test_nodes_library()).string());
   CHECK(registry.node_owner("test.add") != nullptr);
   check_usable(registry, loader);
@@ -80,7 +81,7 @@ TEST_CASE("bad plugins are refused with a clear message, the registry unchanged"
     std::string message;
   };
   const Case cases[] = {
-      {"abi_999", "ABI version 999, this host needs 1"},
+      {"abi_999", "ABI version 999, this host needs 2"},
       {"no_entry", "no kg_plugin_entry symbol: not a Kinegraph plugin"},
       {"no_abi", "no kg_plugin_abi_version symbol: not a Kinegraph plugin"},
       {"entry_throws", "entry threw: deliberately thrown by the entry"},

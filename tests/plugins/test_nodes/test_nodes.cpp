@@ -5,11 +5,13 @@
 #include <condition_variable>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <memory>
 #include <mutex>
 #include <stdexcept>
 #include <string>
+#include <thread>
 
 #include "kg/graph/atomic_file.hpp"
 #include "kg/graph/plugin_abi.hpp"
@@ -55,13 +57,43 @@ class Fail final : public kg::graph::Node {
 
 class Print final : public kg::graph::Node {
  public:
-  explicit Print(const Params& p) : path_(p.get<std::string>("path")) {}
+  explicit Print(const Params& p)
+      : path_(p.get<std::string>("path")), write_seconds_(p.get<double>("write_seconds")) {}
   void run(RunContext& ctx) const override {
     const double value = ctx.input<double>("value");
     char text[64];
     std::snprintf(text, sizeof text, "%.17g\n", value);
-    kg::graph::write_file_atomically(path_, [&](std::ostream& os) { os << text; });
+    kg::graph::write_file_atomically(path_, [&](std::ostream& os) {
+      os << text[0] << std::flush;  // what an interrupted write would leave behind
+      std::this_thread::sleep_for(std::chrono::duration<double>(write_seconds_));
+      os << text + 1;
+    });
     ctx.log("wrote " + path_);
+  }
+
+ private:
+  std::string path_;
+  double write_seconds_;
+};
+
+// Reads a number from a text file (batch tests): "abort" aborts the process, as a crashing node
+// would; anything else not a number fails the node.
+class ReadNumber final : public kg::graph::Node {
+ public:
+  explicit ReadNumber(const Params& p) : path_(p.get<std::string>("path")) {}
+  void run(RunContext& ctx) const override {
+    const std::string text = kg::graph::read_input_file(path_, "number file");
+    if (text.rfind("abort", 0) == 0) std::abort();
+    std::size_t used = 0;
+    double value = 0;
+    try {
+      value = std::stod(text, &used);
+    } catch (const std::exception&) {
+      used = 0;
+    }
+    if (used == 0) throw std::runtime_error(path_ + ": expected a number, got '" + text + "'");
+    ctx.output("value", value);
+    ctx.report("value", value);
   }
 
  private:
@@ -142,7 +174,22 @@ kg::graph::PluginRecord make_record() {
                                    .type = ParamType::OutputPath,
                                    .default_value = std::string(),
                                    .doc = "the file to write",
-                                   .required = true}}}));
+                                   .required = true},
+                                  {.name = "write_seconds",
+                                   .type = ParamType::Float,
+                                   .default_value = 0.0,
+                                   .doc = "seconds the write takes (the file half written meanwhile)",
+                                   .min = 0.0}}}));
+  r.nodes.push_back(type<ReadNumber>({"test.read_number",
+                                      1,
+                                      "Reads a number from a text file.",
+                                      {},
+                                      {{"value", "kg.Scalar", true, "the number"}},
+                                      {{.name = "path",
+                                        .type = ParamType::InputPath,
+                                        .default_value = std::string(),
+                                        .doc = "the file to read",
+                                        .required = true}}}));
   r.nodes.push_back(type<Rendezvous>(
       {"test.rendezvous",
        1,

@@ -12,6 +12,7 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <vector>
 
 namespace kg::graph {
 
@@ -26,5 +27,14 @@ bool is_input_file(const std::filesystem::path& path);
 // is an input file. If `write` throws or the stream fails, the temporary file is removed, the
 // target is untouched, and the error propagates (std::runtime_error naming the path).
 void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write);
+
+// Removes the temporary file of every write_file_atomically call still in progress in this process,
+// without locks or allocation, so a SIGINT/SIGTERM handler may call it: an interrupted process
+// leaves no partial output beside its targets.
+void remove_pending_temporaries() noexcept;
+
+// The targets write_file_atomically has completed in this process, in order (a batch runs each
+// item in its own process, so these are the item's outputs).
+std::vector<std::filesystem::path> written_files();
 
 }  // namespace kg::graph

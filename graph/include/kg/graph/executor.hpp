@@ -41,6 +41,7 @@ struct RunResult {
 
 struct RunOptions {
   int jobs = 1;  // threads; values < 1 mean 1
+  bool reproducible = false;  // RunContext::reproducible
   // Called with (node id, message) for node log lines and failures; default prints to stderr.
   std::function<void(const std::string&, const std::string&)> on_log{};
 };

@@ -51,6 +51,11 @@ class RunContext {
     return nullptr;
   }
 
+  // True when the run's files must come out byte for byte the same every time (batch runs,
+  // `run --reproducible`): a node then leaves wall-clock times out of the files it writes and
+  // reports them as figures only.
+  virtual bool reproducible() const { return false; }
+
   bool has_input(const std::string& port) const { return !input_value(port).empty(); }
 
   template <Named T>

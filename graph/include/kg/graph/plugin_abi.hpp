@@ -26,7 +26,7 @@
 
 namespace kg::graph {
 
-inline constexpr std::uint32_t kPluginAbiVersion = 1;
+inline constexpr std::uint32_t kPluginAbiVersion = 2;
 
 struct PluginRecord {
   std::string id;       // unique, e.g. "kg.lowpass"

@@ -41,6 +41,10 @@ struct PluginEntry {
 std::vector<PluginEntry> read_graph_plugins(const std::filesystem::path& file,
                                             const std::map<std::string, std::string>& overrides);
 
+// The variables a graph file declares, in file order, none resolved (batch passes a graph only
+// the variables it declares). Throws Error as load_graph does for a malformed head.
+std::vector<Variable> read_graph_variables(const std::filesystem::path& file);
+
 // Loads and validates. `overrides` are --set values; one naming no declared variable is an
 // Error. Node objects are created through `registry`.
 Graph load_graph(const std::filesystem::path& file, const Registry& registry,

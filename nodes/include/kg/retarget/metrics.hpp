@@ -41,7 +41,8 @@
 //                         fraction of sum d^2 (Parseval), position and rotation channels apart.
 //   solve time            not measurable here: passed through from the solver when wired (the
 //                         node's optional `solve_seconds` input, e.g. retarget.per_frame_ik's
-//                         `seconds` output), null in the JSON otherwise.
+//                         `seconds` output), null in the JSON otherwise, and in reproducible
+//                         runs (graph::RunContext::reproducible), where it is a figure only.
 //
 //   RetargetMetrics m = compute_metrics({.result = &out, .constraints = &set, .kinds = &table,
 //                                        .source = &clip, .initial = &m1, .frames_per_key = keys});
