@@ -11,7 +11,9 @@
 #include <string>
 #include <vector>
 
+#include "batch.hpp"
 #include "describe.hpp"
+#include "host.hpp"
 #include "kg/graph/error.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/plugin_abi.hpp"
@@ -25,107 +27,12 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Thrown to leave with an exit code; `message` goes to stderr.
-struct Failure {
-  int code;
-  std::string message;
-};
-
-void warn(const std::string& message) {
-  std::cerr << "kinegraph: warning: " << message << '\n';
-}
-
-// The installation prefix: the executable lives in <prefix>/bin.
-fs::path install_prefix(const char* argv0) {
-  std::error_code ec;
-  fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  if (ec || exe.empty()) exe = fs::absolute(argv0, ec);
-  return exe.parent_path().parent_path();
-}
-
-struct Host {
-  graph::Registry registry;
-  graph::PluginLoader loader{registry};
-  std::vector<fs::path> search_dirs;  // for the graph's bare plugin names, in order
-};
-
-// Steps 1 to 3 of the plugin order (usage_text); step 4 needs the graph (load_graph_plugins).
-void load_plugins(Host& host, const Options& o, const fs::path& prefix) {
-  const fs::path builtin = prefix / "lib" / "kinegraph" / "kg_builtin_nodes.so";
-  std::error_code ec;
-  if (!fs::exists(builtin, ec)) {
-    throw Failure{kExitPlugin,
-                  "the built-in node module is missing: " + builtin.string() +
-                      " (an incomplete build or installation: build the kg_builtin_nodes target)"};
-  }
-  try {
-    host.loader.load_file(builtin);
-  } catch (const std::exception& e) {
-    throw Failure{kExitPlugin, std::string("cannot load the built-in node module: ") + e.what()};
-  }
-  for (const fs::path& dir : o.plugin_dirs) {
-    for (const std::string& problem : host.loader.load_directory(dir)) warn(problem);
-    host.search_dirs.push_back(dir);
-  }
-  for (const fs::path& dir : graph::plugin_path_from_environment()) {
-    for (const std::string& problem : host.loader.load_directory(dir))
-      warn(problem + " (from KINEGRAPH_PLUGIN_PATH)");
-    host.search_dirs.push_back(dir);
-  }
-  host.search_dirs.push_back(prefix / "lib" / "kinegraph" / "plugins");
-}
-
-void load_graph_plugins(Host& host, const Options& o) {
-  std::vector<graph::PluginEntry> entries;
-  try {
-    entries = graph::read_graph_plugins(o.graph, o.sets);
-  } catch (const std::exception& e) {
-    throw Failure{kExitGraphInvalid, e.what()};
-  }
-  for (const auto& [entry, where] : entries) {
-    try {
-      const fs::path path = graph::PluginLoader::resolve(entry, o.graph.parent_path(), host.search_dirs);
-      if (fs::is_directory(path)) {
-        for (const std::string& problem : host.loader.load_directory(path)) warn(problem);
-      } else {
-        host.loader.load_file(path);
-      }
-    } catch (const std::exception& e) {
-      throw Failure{kExitPlugin, where.to_string() + ": plugins: " + e.what()};
-    }
-  }
-}
-
-graph::Graph load_graph(Host& host, const Options& o) {
-  std::error_code ec;
-  if (!fs::is_regular_file(o.graph, ec)) {
-    throw Failure{kExitGraphInvalid, o.graph.string() + ": no such graph file"};
-  }
-  load_graph_plugins(host, o);
-  try {
-    return graph::load_graph(o.graph, host.registry, o.sets);
-  } catch (const graph::Error& e) {
-    throw Failure{kExitGraphInvalid, e.what()};
-  } catch (const std::exception& e) {
-    throw Failure{kExitGraphInvalid, o.graph.string() + ": " + e.what()};
-  }
-}
-
-std::string seconds(double s) {
-  std::ostringstream os;
-  if (s < 1) {
-    os << std::fixed << std::setprecision(s < 0.01 ? 2 : 1) << s * 1000 << " ms";
-  } else {
-    os << std::fixed << std::setprecision(s < 10 ? 2 : 1) << s << " s";
-  }
-  return os.str();
-}
-
 int run(Host& host, const Options& o) {
-  const graph::Graph g = load_graph(host, o);
+  const graph::Graph g = load_graph(host, o.graph, o.sets);
   std::mutex log_mutex;
   graph::RunOptions options;
   options.jobs = o.jobs;
+  options.reproducible = o.reproducible;
   options.on_log = [&log_mutex](const std::string& node, const std::string& message) {
     std::lock_guard lock(log_mutex);
     std::cerr << node << ": " << message << '\n';
@@ -154,12 +61,7 @@ int run(Host& host, const Options& o) {
   std::cerr << "kinegraph: " << o.graph.string() << ": run failed: " << failed << " of "
             << result.nodes.size() << " nodes failed, " << skipped << " skipped ("
             << seconds(result.wall_seconds) << ")\n";
-  for (const graph::NodeRun& n : result.nodes) {
-    if (n.status != graph::NodeStatus::Failed) continue;
-    const graph::NodeInstance* node = g.find_node(n.id);
-    const std::string where = node ? node->where.to_string() : o.graph.string();
-    std::cerr << "  " << where << ": node " << n.id << " (" << n.type << ") failed: " << n.message << '\n';
-  }
+  for (const std::string& failure : node_failures(g, result)) std::cerr << "  " << failure << '\n';
   if (skipped > 0) {
     std::cerr << "  skipped:";
     for (const graph::NodeRun& n : result.nodes) {
@@ -179,22 +81,27 @@ int dispatch(const Options& o, const char* argv0) {
       std::cout << "kinegraph " << KG_VERSION << " (plugin ABI " << graph::kPluginAbiVersion
                 << ", graph format " << graph::kGraphFormatVersion << ")\n";
       return kExitOk;
+    case Verb::Merge:
+      return merge(o);
     default:
       break;
   }
+  remove_partial_outputs_on_signal();
   Host host;
   load_plugins(host, o, install_prefix(argv0));
   switch (o.verb) {
     case Verb::Run:
       return run(host, o);
+    case Verb::Batch:
+      return batch(host, o, argv0);
     case Verb::Validate: {
-      const graph::Graph g = load_graph(host, o);
+      const graph::Graph g = load_graph(host, o.graph, o.sets);
       std::cout << o.graph.string() << ": valid: " << g.nodes.size() << " nodes, " << g.connections.size()
                 << " connections\n";
       return kExitOk;
     }
     case Verb::Dot: {
-      const graph::Graph g = load_graph(host, o);
+      const graph::Graph g = load_graph(host, o.graph, o.sets);
       write_dot(std::cout, g, host.registry);
       return kExitOk;
     }
@@ -222,8 +129,8 @@ int main(int argc, char** argv) {
     options = parse_options(argc, argv);
   } catch (const UsageError& e) {
     std::cerr << "kinegraph: " << e.what() << "\n"
-              << "usage: kinegraph run|validate|dot GRAPH [options], kinegraph nodes [--json]; see kinegraph "
-                 "--help\n";
+              << "usage: kinegraph run|validate|dot|batch GRAPH [options], kinegraph nodes [--json], "
+                 "kinegraph merge DIR; see kinegraph --help\n";
     return kExitUsage;
   }
   try {

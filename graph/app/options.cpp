@@ -13,7 +13,8 @@ struct VerbName {
   Verb verb;
 };
 constexpr VerbName kVerbs[] = {
-    {"run", Verb::Run}, {"validate", Verb::Validate}, {"nodes", Verb::Nodes}, {"dot", Verb::Dot}};
+    {"run", Verb::Run},     {"validate", Verb::Validate}, {"nodes", Verb::Nodes},
+    {"dot", Verb::Dot},     {"batch", Verb::Batch},       {"merge", Verb::Merge}};
 
 const char* verb_name(Verb verb) {
   for (const VerbName& v : kVerbs) {
@@ -23,16 +24,33 @@ const char* verb_name(Verb verb) {
 }
 
 bool takes_graph(Verb verb) {
-  return verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot;
+  return verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot || verb == Verb::Batch;
 }
 
-int parse_jobs(const std::string& text) {
-  int jobs = 0;
-  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), jobs);
-  if (ec != std::errc() || end != text.data() + text.size() || jobs < 1 || jobs > 1024) {
-    throw UsageError("--jobs expects a whole number from 1 to 1024, got '" + text + "'");
+std::optional<int> whole_number(const std::string& text) {
+  int n = 0;
+  auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), n);
+  if (ec != std::errc() || end != text.data() + text.size()) return std::nullopt;
+  return n;
+}
+
+int parse_count(const std::string& option, const std::string& text, int most) {
+  const std::optional<int> n = whole_number(text);
+  if (!n || *n < 1 || *n > most) {
+    throw UsageError(option + " expects a whole number from 1 to " + std::to_string(most) + ", got '" + text + "'");
   }
-  return jobs;
+  return *n;
+}
+
+Shard parse_shard(const std::string& text) {
+  const auto slash = text.find('/');
+  const std::optional<int> index = whole_number(text.substr(0, slash));
+  const std::optional<int> count =
+      slash == std::string::npos ? std::nullopt : whole_number(text.substr(slash + 1));
+  if (!index || !count || *count < 1 || *index < 0 || *index >= *count) {
+    throw UsageError("--shard expects I/N with 0 <= I < N (e.g. 0/4 for the first of four), got '" + text + "'");
+  }
+  return {*index, *count};
 }
 
 }  // namespace
@@ -41,10 +59,16 @@ std::string usage_text() {
   return R"(kinegraph: runs Kinegraph node graphs (YAML files wiring motion-processing nodes).
 
 usage:
-  kinegraph run GRAPH [--set NAME=VALUE]... [--jobs N] [--report FILE] [--plugin-dir DIR]...
+  kinegraph run GRAPH [--set NAME=VALUE]... [--jobs N] [--report FILE] [--reproducible]
+                [--plugin-dir DIR]...
   kinegraph validate GRAPH [--set NAME=VALUE]... [--plugin-dir DIR]...
   kinegraph nodes [--json] [--plugin-dir DIR]...
   kinegraph dot GRAPH [--set NAME=VALUE]... [--plugin-dir DIR]...
+  kinegraph batch GRAPH --inputs PATTERN... --out DIR [--jobs N] [--set NAME=VALUE]... [--force]
+                  [--shard I/N] [--input-list FILE] [--plugin-dir DIR]...
+  kinegraph batch GRAPH --inputs PATTERN... --out DIR --slurm SCRIPT [--shards N]
+                  [--sbatch OPTION]... [--submit] [--jobs N] [--set NAME=VALUE]...
+  kinegraph merge DIR
   kinegraph --help | --version
 
 verbs:
@@ -56,13 +80,39 @@ verbs:
             in <prefix>/lib/kinegraph/plugins, and those of --plugin-dir and KINEGRAPH_PLUGIN_PATH)
   dot       print GRAPH as Graphviz, ports and their types on the edges:
             kinegraph dot GRAPH | dot -Tsvg > graph.svg
+  batch     run GRAPH once per input file, up to --jobs items at once, each in its own process
+            with the variables input (the file), stem (its name without extension) and out
+            (DIR/stem, the item's folder). Writes DIR/logs/STEM.log per item and a manifest,
+            DIR/manifest.jsonl (DIR/manifest.shard-I-of-N.jsonl with --shard), one JSON line per
+            item: status, wall time, outputs with their SHA-256, the figures the graph reports,
+            and the hashes of input, graph and settings. Items already done with the same
+            hashes and outputs in place are skipped (--force redoes them). Ctrl-C stops at
+            once, removes partial outputs, and keeps the manifest: the same command continues.
+            With --slurm, writes an sbatch array script (one task per shard) and a merge job
+            script instead of running (--submit also submits them, the merge after the array)
+  merge     merge the shard manifests in DIR into DIR/manifest.jsonl and report what failed or
+            is missing
 
 options:
   --set NAME=VALUE  give the graph variable NAME a value (GRAPH documents its variables at the top)
-  --jobs N          run independent branches on up to N threads (default 1)
+  --jobs N          run: independent branches on up to N threads (default 1); batch: items at
+                    once (default: the cores this process may use)
   --report FILE     write per-node status, wall times and reported figures as JSON to FILE
+  --reproducible    run: files written come out byte for byte the same on every run and machine
+                    (no wall-clock times in them; those stay in --report); batch always is
   --plugin-dir DIR  load every plugin (*.so) directly in DIR; may be repeated
   --json            nodes: print JSON instead of text
+  --inputs PATTERN...  batch: input files, as paths or patterns: * ? [..] within a folder name,
+                    ** for any depth of folders (quote them so the shell leaves them alone);
+                    every argument up to the next option is a pattern
+  --input-list FILE batch: input files listed in FILE, one per line (with or without --inputs)
+  --out DIR         batch: the folder of item outputs, logs and the manifest
+  --force           batch: redo items already done
+  --shard I/N       batch: run only items I, I+N, I+2N, ... of the sorted inputs (0 <= I < N)
+  --slurm SCRIPT    batch: write SCRIPT, an sbatch array job, and SCRIPT's merge job beside it
+  --shards N        with --slurm: array tasks (default: one per 8 items, at most 100)
+  --sbatch OPTION   with --slurm: an #SBATCH line for both jobs (--sbatch=--partition=short)
+  --submit          with --slurm: submit the array, then the merge depending on it
 
 plugins, loaded in this order (a plugin id loaded once is not loaded again):
   1. the built-in nodes, <prefix>/lib/kinegraph/kg_builtin_nodes.so beside this program
@@ -79,6 +129,7 @@ exit codes:
   2  usage error
   3  the graph is invalid: it cannot be read or fails validation
   4  plugin error: the built-in node module, or a plugin GRAPH names, cannot be loaded
+  batch and merge: 1 when any item failed (or, merging, has no record); 130 when interrupted
 
 Messages go to stderr; `nodes` and `dot` write to stdout.
 )";
@@ -87,7 +138,7 @@ Messages go to stderr; `nodes` and `dot` write to stdout.
 Options parse_options(int argc, const char* const* argv) {
   Options o;
   std::optional<Verb> verb;
-  bool help = false, version = false, jobs_given = false;
+  bool help = false, version = false;
   std::vector<std::string> positionals;
   // Options given, with the verbs they apply to: checked once the verb is known.
   std::vector<std::pair<std::string, std::vector<Verb>>> given;
@@ -128,12 +179,61 @@ Options parse_options(int argc, const char* const* argv) {
       if (!o.sets.emplace(key, setting.substr(eq + 1)).second) {
         throw UsageError("--set " + key + " is given twice");
       }
-      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Dot}});
+      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Dot, Verb::Batch}});
     } else if (name == "--jobs" || name == "-j") {
-      if (jobs_given) throw UsageError("--jobs is given twice");
-      o.jobs = parse_jobs(take_value());
-      jobs_given = true;
-      given.push_back({"--jobs", {Verb::Run}});
+      if (o.jobs_given) throw UsageError("--jobs is given twice");
+      o.jobs = parse_count("--jobs", take_value(), 1024);
+      o.jobs_given = true;
+      given.push_back({"--jobs", {Verb::Run, Verb::Batch}});
+    } else if (name == "--reproducible") {
+      if (has_value) throw UsageError("--reproducible takes no value");
+      o.reproducible = true;
+      given.push_back({name, {Verb::Run}});
+    } else if (name == "--inputs") {
+      if (has_value) {
+        o.inputs.push_back(value);
+      } else {
+        for (; i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0; ++i) o.inputs.emplace_back(argv[i + 1]);
+      }
+      if (o.inputs.empty()) throw UsageError("--inputs needs at least one file or pattern");
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--input-list") {
+      if (!o.input_list.empty()) throw UsageError("--input-list is given twice");
+      o.input_list = take_value();
+      if (o.input_list.empty()) throw UsageError("--input-list needs a file name");
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--out") {
+      if (!o.out.empty()) throw UsageError("--out is given twice");
+      o.out = take_value();
+      if (o.out.empty()) throw UsageError("--out needs a folder");
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--force") {
+      if (has_value) throw UsageError("--force takes no value");
+      o.force = true;
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--shard") {
+      if (o.shard) throw UsageError("--shard is given twice");
+      o.shard = parse_shard(take_value());
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--slurm") {
+      if (!o.slurm.empty()) throw UsageError("--slurm is given twice");
+      o.slurm = take_value();
+      if (o.slurm.empty()) throw UsageError("--slurm needs a script file name");
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--shards") {
+      if (o.shards) throw UsageError("--shards is given twice");
+      o.shards = parse_count("--shards", take_value(), 10000);
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--sbatch") {
+      const std::string option = take_value();
+      if (option.empty()) throw UsageError("--sbatch needs an sbatch option, e.g. --sbatch=--partition=short");
+      if (option.find('\n') != std::string::npos) throw UsageError("--sbatch option has a line break");
+      o.sbatch_options.push_back(option);
+      given.push_back({name, {Verb::Batch}});
+    } else if (name == "--submit") {
+      if (has_value) throw UsageError("--submit takes no value");
+      o.submit = true;
+      given.push_back({name, {Verb::Batch}});
     } else if (name == "--report") {
       if (!o.report.empty()) throw UsageError("--report is given twice");
       o.report = take_value();
@@ -143,7 +243,7 @@ Options parse_options(int argc, const char* const* argv) {
       const std::string dir = take_value();
       if (dir.empty()) throw UsageError("--plugin-dir needs a directory");
       o.plugin_dirs.emplace_back(dir);
-      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Nodes, Verb::Dot}});
+      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Nodes, Verb::Dot, Verb::Batch}});
     } else if (name == "--json") {
       if (has_value) throw UsageError("--json takes no value");
       o.json = true;
@@ -161,7 +261,7 @@ Options parse_options(int argc, const char* const* argv) {
     o.verb = Verb::Version;
     return o;
   }
-  if (positionals.empty()) throw UsageError("no verb given: run, validate, nodes or dot");
+  if (positionals.empty()) throw UsageError("no verb given: run, validate, nodes, dot, batch or merge");
   const std::string& verb_text = positionals.front();
   for (const VerbName& v : kVerbs) {
     if (verb_text == v.name) verb = v.verb;
@@ -187,8 +287,25 @@ Options parse_options(int argc, const char* const* argv) {
     if (positionals.size() < 2) throw UsageError(std::string(verb_name(o.verb)) + " needs a GRAPH file");
     if (positionals.size() > 2) throw UsageError("unexpected argument '" + positionals[2] + "'");
     o.graph = positionals[1];
+  } else if (o.verb == Verb::Merge) {
+    if (positionals.size() < 2) throw UsageError("merge needs the batch's DIR");
+    if (positionals.size() > 2) throw UsageError("unexpected argument '" + positionals[2] + "'");
+    o.out = positionals[1];
   } else if (positionals.size() > 1) {
     throw UsageError("unexpected argument '" + positionals[1] + "'");
+  }
+  if (o.verb == Verb::Batch) {
+    if (o.inputs.empty() && o.input_list.empty()) throw UsageError("batch needs --inputs PATTERN... or --input-list FILE");
+    if (o.out.empty()) throw UsageError("batch needs --out DIR");
+    if (o.slurm.empty() && (o.shards || !o.sbatch_options.empty() || o.submit)) {
+      throw UsageError("--shards, --sbatch and --submit go with --slurm SCRIPT");
+    }
+    if (!o.slurm.empty() && o.shard) throw UsageError("--shard and --slurm do not go together (each array task is a shard)");
+    for (const char* own : {"input", "stem", "out"}) {
+      if (o.sets.count(own)) {
+        throw UsageError(std::string("--set ") + own + "=...: batch sets the variable " + own + " for each item itself");
+      }
+    }
   }
   return o;
 }

@@ -6,6 +6,7 @@
 
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -19,18 +20,38 @@ enum ExitCode : int {
   kExitUsage = 2,         // bad command line
   kExitGraphInvalid = 3,  // the graph cannot be read or fails validation
   kExitPlugin = 4,        // the built-in node module or a plugin the graph names cannot be loaded
+  kExitInterrupted = 130, // batch: stopped by SIGINT or SIGTERM; running it again continues
 };
 
-enum class Verb { Help, Version, Run, Validate, Nodes, Dot };
+enum class Verb { Help, Version, Run, Validate, Nodes, Dot, Batch, Merge };
+
+// --shard I/N: items whose position in the sorted input list is I modulo N (0 <= I < N).
+struct Shard {
+  int index = 0;
+  int count = 1;
+};
 
 struct Options {
   Verb verb = Verb::Help;
-  std::filesystem::path graph;                     // run, validate, dot
+  std::filesystem::path graph;                     // run, validate, dot, batch
   std::map<std::string, std::string> sets;         // --set NAME=VALUE
-  int jobs = 1;                                    // --jobs N (run)
+  int jobs = 1;                                    // --jobs N (run: threads; batch: items at once)
+  bool jobs_given = false;                         // batch defaults jobs to the cores it may use
   std::filesystem::path report;                    // --report FILE (run); empty: none
   std::vector<std::filesystem::path> plugin_dirs;  // --plugin-dir DIR, in order
   bool json = false;                               // --json (nodes)
+  bool reproducible = false;                       // --reproducible (run; batch always is)
+
+  // batch
+  std::vector<std::string> inputs;        // --inputs PATTERN... (file_patterns.hpp)
+  std::filesystem::path input_list;       // --input-list FILE: one input path per line
+  std::filesystem::path out;              // --out DIR (batch); the DIR argument of merge
+  bool force = false;                     // --force: redo items already done
+  std::optional<Shard> shard;             // --shard I/N
+  std::filesystem::path slurm;            // --slurm SCRIPT: write sbatch scripts instead of running
+  int shards = 0;                         // --shards N (with --slurm; 0: one per 8 items, at most 100)
+  std::vector<std::string> sbatch_options;  // --sbatch OPTION, an #SBATCH line each
+  bool submit = false;                    // --submit: with --slurm, also submit both jobs
 };
 
 class UsageError : public std::runtime_error {

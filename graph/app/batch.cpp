@@ -1,0 +1,683 @@
+#include "batch.hpp"
+
+#include <fcntl.h>
+#include <poll.h>
+#include <sched.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <map>
+#include <set>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "kg/graph/atomic_file.hpp"
+#include "kg/graph/error.hpp"
+#include "kg/graph/executor.hpp"
+#include "kg/graph/file_patterns.hpp"
+#include "kg/graph/manifest.hpp"
+#include "kg/graph/sha256.hpp"
+#include "kg/graph/yaml_io.hpp"
+#include "slurm.hpp"
+
+namespace kg::app {
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+
+// ---- the items ------------------------------------------------------------------------------
+
+struct Item {
+  fs::path input;            // absolute
+  std::string stem;
+  std::string input_sha256;  // filled when a previous record had to be checked
+};
+
+std::vector<fs::path> inputs_of(const Options& o) {
+  std::vector<std::string> patterns = o.inputs;
+  if (!o.input_list.empty()) {
+    std::ifstream in(o.input_list);
+    if (!in) throw Failure{kExitUsage, "--input-list " + o.input_list.string() + ": cannot open it"};
+    const fs::path base = fs::absolute(o.input_list).parent_path();
+    std::string line;
+    while (std::getline(in, line)) {
+      const auto first = line.find_first_not_of(" \t\r");
+      if (first == std::string::npos || line[first] == '#') continue;
+      line = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
+      patterns.push_back(fs::path(line).is_absolute() ? line : (base / line).string());
+    }
+  }
+  try {
+    return graph::expand_file_patterns(patterns);
+  } catch (const std::invalid_argument& e) {
+    throw Failure{kExitUsage, e.what()};
+  }
+}
+
+// Stems name the items' folders and logs, so two inputs may not share one.
+std::vector<Item> items_of(const std::vector<fs::path>& inputs) {
+  std::vector<Item> items;
+  std::map<std::string, fs::path> by_stem;
+  for (const fs::path& input : inputs) {
+    const std::string stem = input.stem().string();
+    const auto [it, fresh] = by_stem.emplace(stem, input);
+    if (!fresh) {
+      throw Failure{kExitUsage, "inputs " + it->second.string() + " and " + input.string() + " share the name '" +
+                                    stem + "', so their outputs and logs would collide: batch them separately"};
+    }
+    items.push_back({input, stem, {}});
+  }
+  return items;
+}
+
+std::vector<Item> shard_of(std::vector<Item> items, const std::optional<Shard>& shard) {
+  if (!shard) return items;
+  std::vector<Item> mine;
+  for (std::size_t i = static_cast<std::size_t>(shard->index); i < items.size(); i += shard->count)
+    mine.push_back(std::move(items[i]));
+  return mine;
+}
+
+std::string shard_text(const std::optional<Shard>& shard) {
+  return shard ? std::to_string(shard->index) + "/" + std::to_string(shard->count) : "";
+}
+
+fs::path manifest_path(const fs::path& dir, const std::optional<Shard>& shard) {
+  if (!shard) return dir / "manifest.jsonl";
+  return dir / ("manifest.shard-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) + ".jsonl");
+}
+
+// Every record in DIR's manifests (the batch's own and its shards'), in file name order.
+std::vector<graph::ManifestRecord> read_manifests(const fs::path& dir) {
+  std::vector<fs::path> files;
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.rfind("manifest", 0) == 0 && it->path().extension() == ".jsonl") files.push_back(it->path());
+  }
+  std::sort(files.begin(), files.end());
+  std::vector<graph::ManifestRecord> records;
+  std::vector<std::string> problems;
+  for (const fs::path& file : files) {
+    std::vector<graph::ManifestRecord> more = graph::read_manifest(file, problems);
+    records.insert(records.end(), std::make_move_iterator(more.begin()), std::make_move_iterator(more.end()));
+  }
+  for (const std::string& problem : problems) warn(problem);
+  return records;
+}
+
+std::string relative_to(const fs::path& path, const fs::path& dir) {
+  const fs::path relative = path.lexically_relative(dir);
+  if (!relative.empty() && *relative.begin() != "..") return relative.generic_string();
+  return path.string();
+}
+
+// ---- what every item shares ------------------------------------------------------------------
+
+struct Batch {
+  explicit Batch(const Options& options) : o(options) {}
+  const Options& o;
+  fs::path graph;  // absolute
+  fs::path dir;    // absolute
+  bool declares_stem = false, declares_out = false;
+  std::string graph_sha256, settings_sha256;
+  std::string host_name;
+  std::string shard;
+
+  std::map<std::string, std::string> variables(const Item& item) const {
+    std::map<std::string, std::string> sets = o.sets;
+    sets["input"] = item.input.string();
+    if (declares_stem) sets["stem"] = item.stem;
+    if (declares_out) sets["out"] = (dir / item.stem).string();
+    return sets;
+  }
+  fs::path log(const Item& item) const { return dir / "logs" / (item.stem + ".log"); }
+  // Beside the log, named after the process writing it: renamed over the log when the item ends.
+  fs::path partial_log(const Item& item, pid_t pid) const {
+    return dir / "logs" / ("." + item.stem + ".log.tmp." + std::to_string(pid));
+  }
+};
+
+// An item done before counts as done when nothing it depends on changed and its outputs are
+// still there at their recorded sizes.
+bool still_done(const graph::ManifestRecord& r, Item& item, const Batch& b) {
+  if (!r.ok() || r.graph_sha256 != b.graph_sha256 || r.settings_sha256 != b.settings_sha256) return false;
+  for (const graph::ManifestOutput& out : r.outputs) {
+    const fs::path path = fs::path(out.path).is_absolute() ? fs::path(out.path) : b.dir / out.path;
+    std::error_code ec;
+    if (fs::file_size(path, ec) != out.bytes || ec) return false;
+  }
+  try {
+    item.input_sha256 = graph::sha256_file(item.input);
+  } catch (const std::exception&) {
+    return false;
+  }
+  return r.input_sha256 == item.input_sha256;
+}
+
+// ---- one item, in its own process ----------------------------------------------------------------
+
+// For the signal handler: the item's partial log, removed with the partial outputs.
+char g_partial_log[4096];
+
+extern "C" void item_interrupted(int sig) {
+  graph::remove_pending_temporaries();
+  if (g_partial_log[0]) ::unlink(g_partial_log);
+  ::signal(sig, SIG_DFL);
+  ::raise(sig);
+}
+
+bool write_all(int fd, const std::string& text) {
+  std::size_t done = 0;
+  while (done < text.size()) {
+    const ssize_t n = ::write(fd, text.data() + done, text.size() - done);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    done += static_cast<std::size_t>(n);
+  }
+  return true;
+}
+
+[[noreturn]] void run_item(Host& host, const Batch& b, const Item& item, int result_fd) {
+  const Clock::time_point start = Clock::now();
+  const fs::path partial = b.partial_log(item, ::getpid());
+  std::snprintf(g_partial_log, sizeof g_partial_log, "%s", partial.c_str());
+  struct sigaction action {};
+  action.sa_handler = item_interrupted;
+  ::sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, nullptr);
+  ::sigaction(SIGTERM, &action, nullptr);
+
+  const int log_fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (log_fd >= 0) {
+    ::dup2(log_fd, STDOUT_FILENO);
+    ::dup2(log_fd, STDERR_FILENO);
+    ::close(log_fd);
+  }
+  const int null_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+  if (null_fd >= 0) ::dup2(null_fd, STDIN_FILENO);
+
+  graph::ManifestRecord r;
+  r.input = item.input.string();
+  r.stem = item.stem;
+  r.log = relative_to(b.log(item), b.dir);
+  r.graph_sha256 = b.graph_sha256;
+  r.settings_sha256 = b.settings_sha256;
+  r.host = b.host_name;
+  r.shard = b.shard;
+  try {
+    r.input_sha256 = item.input_sha256.empty() ? graph::sha256_file(item.input) : item.input_sha256;
+    const std::map<std::string, std::string> sets = b.variables(item);
+    std::cerr << "kinegraph batch: " << b.graph.string() << " on " << r.input << '\n';
+    for (const auto& [name, value] : sets) std::cerr << "  " << name << " = " << value << '\n';
+    const graph::Graph g = load_graph(host, b.graph, sets);
+    graph::RunOptions options;
+    options.reproducible = true;
+    options.on_log = [](const std::string& node, const std::string& message) {
+      std::cerr << node << ": " << message << '\n';
+    };
+    const graph::RunResult result = graph::run_graph(g, host.registry, options);
+    r.graph_seconds = result.wall_seconds;
+    for (const graph::NodeRun& n : result.nodes) {
+      for (const auto& [key, figure] : n.figures) r.figures.emplace_back(n.id + "." + key, figure);
+    }
+    const std::vector<std::string> failures = node_failures(g, result);
+    for (const std::string& failure : failures) {
+      std::cerr << failure << '\n';
+      r.message += (r.message.empty() ? "" : "; ") + failure;
+    }
+    if (!result.ok && failures.empty()) r.message = "nodes were skipped";
+    r.status = result.ok ? "ok" : "failed";
+  } catch (const Failure& f) {
+    r.status = "failed";
+    r.message = f.message;
+  } catch (const std::exception& e) {
+    r.status = "failed";
+    r.message = e.what();
+  }
+  for (const fs::path& written : graph::written_files()) {
+    graph::ManifestOutput out;
+    out.path = relative_to(fs::absolute(written).lexically_normal(), b.dir);
+    try {
+      out.sha256 = graph::sha256_file(written);
+      out.bytes = fs::file_size(written);
+    } catch (const std::exception& e) {
+      r.status = "failed";
+      r.message += std::string(r.message.empty() ? "" : "; ") + e.what();
+    }
+    r.outputs.push_back(std::move(out));
+  }
+  r.wall_seconds = since(start);
+  r.finished_at = graph::utc_timestamp();
+  std::cerr << "kinegraph batch: " << r.status << " in " << seconds(r.wall_seconds)
+            << (r.message.empty() ? "" : ": " + r.message) << '\n';
+  std::cout.flush();
+  std::cerr.flush();
+  std::error_code ec;
+  fs::rename(partial, b.log(item), ec);
+  g_partial_log[0] = 0;
+  const bool sent = write_all(result_fd, graph::manifest_line(r) + "\n");
+  ::_exit(sent ? 0 : 1);
+}
+
+// ---- the parent: scheduling, progress, signals ----------------------------------------------------
+
+// The flag is what counts; the pipe only wakes poll().
+volatile sig_atomic_t g_interrupted = 0;
+int g_signal_pipe[2] = {-1, -1};
+
+extern "C" void batch_interrupted(int sig) {
+  g_interrupted = 1;
+  const unsigned char byte = static_cast<unsigned char>(sig);
+  [[maybe_unused]] const ssize_t n = ::write(g_signal_pipe[1], &byte, 1);
+}
+
+std::string clock_text(double s) {
+  const long total = std::lround(std::max(0.0, s));
+  std::ostringstream os;
+  if (total >= 3600) os << total / 3600 << ':' << std::setw(2) << std::setfill('0') << (total / 60) % 60;
+  else os << total / 60;
+  os << ':' << std::setw(2) << std::setfill('0') << total % 60;
+  return os.str();
+}
+
+// Done/failed counts, rate and ETA: a redrawn bar on a terminal, one line per item otherwise.
+class Progress {
+ public:
+  Progress(std::size_t total, bool terminal) : total_(total), terminal_(terminal), start_(Clock::now()) {}
+
+  void item_done(const graph::ManifestRecord& r, const fs::path& dir) {
+    ++done_;
+    failed_ += !r.ok();
+    if (!terminal_) {
+      std::cerr << "[" << done_ << "/" << total_ << "] " << (r.ok() ? "ok" : "FAILED") << ' ' << r.stem << " ("
+                << seconds(r.wall_seconds) << ")" << (r.ok() ? "" : ": " + r.message + " (log: " + (dir / r.log).string() + ")")
+                << " · " << failed_ << " failed · " << rate_text() << '\n';
+      return;
+    }
+    if (!r.ok()) {
+      std::cerr << "\r\x1b[K" << "FAILED " << r.stem << ": " << r.message << " (log: " << (dir / r.log).string() << ")\n";
+    }
+    draw();
+  }
+
+  void tick() {
+    if (terminal_ && since(last_draw_) > 0.2) draw();
+  }
+
+  void finish() {
+    if (terminal_ && drawn_) std::cerr << "\r\x1b[K" << std::flush;
+  }
+
+ private:
+  std::string rate_text() const {
+    const double elapsed = since(start_);
+    const double rate = elapsed > 0 ? done_ / elapsed : 0;
+    std::ostringstream os;
+    os << std::fixed << std::setprecision(rate < 10 ? 2 : 1) << rate << " items/s · ETA ";
+    os << (done_ > 0 ? clock_text((total_ - done_) / rate) : std::string("?"));
+    return os.str();
+  }
+
+  void draw() {
+    constexpr int kWidth = 30;
+    const int filled = total_ ? static_cast<int>(kWidth * done_ / total_) : kWidth;
+    std::cerr << "\r\x1b[K[" << std::string(filled, '#') << std::string(kWidth - filled, '.') << "] " << done_ << '/'
+              << total_ << " · " << failed_ << " failed · " << rate_text() << std::flush;
+    drawn_ = true;
+    last_draw_ = Clock::now();
+  }
+
+  std::size_t total_, done_ = 0, failed_ = 0;
+  bool terminal_, drawn_ = false;
+  Clock::time_point start_, last_draw_ = Clock::now();
+};
+
+struct Running {
+  pid_t pid;
+  int fd;
+  const Item* item;
+  std::string output;
+};
+
+std::string signal_name(int sig) {
+  const char* text = ::strsignal(sig);
+  return "signal " + std::to_string(sig) + (text ? std::string(" (") + text + ")" : "");
+}
+
+int cores_available() {
+  cpu_set_t set;
+  if (::sched_getaffinity(0, sizeof set, &set) == 0) return std::max(1, CPU_COUNT(&set));
+  return static_cast<int>(std::max(1L, ::sysconf(_SC_NPROCESSORS_ONLN)));
+}
+
+struct Outcome {
+  std::vector<graph::ManifestRecord> records;
+  std::size_t interrupted = 0;
+  bool stopped = false;
+};
+
+Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd) {
+  Outcome outcome;
+  if (::pipe2(g_signal_pipe, O_CLOEXEC | O_NONBLOCK) != 0) throw Failure{kExitNodeFailed, "cannot create a pipe"};
+  struct sigaction action {}, old_int {}, old_term {};
+  action.sa_handler = batch_interrupted;
+  ::sigemptyset(&action.sa_mask);
+  ::sigaction(SIGINT, &action, &old_int);
+  ::sigaction(SIGTERM, &action, &old_term);
+
+  Progress progress(todo.size(), ::isatty(STDERR_FILENO) && std::getenv("TERM") &&
+                                     std::string(std::getenv("TERM")) != "dumb");
+  std::vector<Running> running;
+  std::size_t next = 0;
+  auto finish = [&](Running& r, int status) {
+    graph::ManifestRecord record;
+    bool have = false;
+    if (!r.output.empty() && r.output.back() == '\n') {
+      try {
+        record = graph::parse_manifest_line(r.output);
+        have = true;
+      } catch (const std::exception& e) {
+        record.message = std::string("its report could not be read: ") + e.what();
+      }
+    }
+    const fs::path partial = b.partial_log(*r.item, r.pid);
+    std::error_code ec;
+    // Stopped from outside (Ctrl-C reaches the whole process group, Slurm's scancel every
+    // process of the job): not the item's fault, so no record, and the next run does it again.
+    if (!have && WIFSIGNALED(status) && (WTERMSIG(status) == SIGINT || WTERMSIG(status) == SIGTERM)) {
+      fs::remove(partial, ec);
+      ++outcome.interrupted;
+      return;
+    }
+    if (!have) {
+      record.input = r.item->input.string();
+      record.stem = r.item->stem;
+      record.status = "failed";
+      if (record.message.empty()) {
+        record.message = WIFSIGNALED(status) ? "its process died of " + signal_name(WTERMSIG(status))
+                                             : "its process exited with code " + std::to_string(WEXITSTATUS(status)) +
+                                                   " before reporting";
+      }
+      record.log = relative_to(b.log(*r.item), b.dir);
+      record.graph_sha256 = b.graph_sha256;
+      record.settings_sha256 = b.settings_sha256;
+      record.host = b.host_name;
+      record.shard = b.shard;
+      record.finished_at = graph::utc_timestamp();
+      if (fs::exists(partial, ec)) fs::rename(partial, b.log(*r.item), ec);
+    }
+    if (manifest_fd >= 0 && !write_all(manifest_fd, graph::manifest_line(record) + "\n"))
+      warn("cannot append to the manifest: " + std::string(std::strerror(errno)));
+    progress.item_done(record, b.dir);
+    outcome.records.push_back(std::move(record));
+  };
+
+  auto stop = [&] {
+    if (outcome.stopped) return;
+    outcome.stopped = true;
+    progress.finish();
+    std::cerr << "kinegraph: batch: interrupted; stopping " << running.size()
+              << " running item(s) and removing their partial outputs\n";
+    for (const Running& r : running) ::kill(r.pid, SIGTERM);
+  };
+  // Blocked around fork, so that a new item never runs with the batch's handlers.
+  sigset_t stop_signals, unblocked;
+  ::sigemptyset(&stop_signals);
+  ::sigaddset(&stop_signals, SIGINT);
+  ::sigaddset(&stop_signals, SIGTERM);
+
+  g_interrupted = 0;
+  while (true) {
+    if (g_interrupted) stop();
+    while (!outcome.stopped && running.size() < static_cast<std::size_t>(jobs) && next < todo.size()) {
+      int fds[2];
+      if (::pipe2(fds, O_CLOEXEC) != 0) throw Failure{kExitNodeFailed, "cannot create a pipe"};
+      std::cout.flush();
+      std::cerr.flush();
+      ::sigprocmask(SIG_BLOCK, &stop_signals, &unblocked);
+      const pid_t pid = ::fork();
+      if (pid < 0) {
+        const int error = errno;
+        ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+        throw Failure{kExitNodeFailed, std::string("cannot start a process: ") + std::strerror(error)};
+      }
+      if (pid == 0) {
+        ::signal(SIGINT, SIG_DFL);
+        ::signal(SIGTERM, SIG_DFL);
+        ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+        ::close(fds[0]);
+        ::close(g_signal_pipe[0]);
+        ::close(g_signal_pipe[1]);
+        if (manifest_fd >= 0) ::close(manifest_fd);
+        for (const Running& other : running) ::close(other.fd);
+        run_item(host, b, *todo[next], fds[1]);
+      }
+      ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+      ::close(fds[1]);
+      running.push_back({pid, fds[0], todo[next], {}});
+      ++next;
+    }
+    if (running.empty()) break;
+
+    std::vector<pollfd> polled;
+    polled.push_back({g_signal_pipe[0], POLLIN, 0});
+    for (const Running& r : running) polled.push_back({r.fd, POLLIN, 0});
+    const int ready = ::poll(polled.data(), polled.size(), 200);
+    if (ready < 0 && errno != EINTR) throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
+    if (polled[0].revents & POLLIN) {
+      unsigned char sig[16];
+      while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
+      }
+    }
+    if (g_interrupted) stop();
+    for (std::size_t i = running.size(); i-- > 0;) {
+      if (!(polled[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      char buffer[4096];
+      const ssize_t n = ::read(running[i].fd, buffer, sizeof buffer);
+      if (n > 0) {
+        running[i].output.append(buffer, static_cast<std::size_t>(n));
+        continue;
+      }
+      if (n < 0 && errno == EINTR) continue;
+      ::close(running[i].fd);
+      int status = 0;
+      while (::waitpid(running[i].pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      finish(running[i], status);
+      running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
+    }
+    progress.tick();
+  }
+  progress.finish();
+  ::sigaction(SIGINT, &old_int, nullptr);
+  ::sigaction(SIGTERM, &old_term, nullptr);
+  ::close(g_signal_pipe[0]);
+  ::close(g_signal_pipe[1]);
+  return outcome;
+}
+
+// One line per item: this batch's items in order, then any other record the folder holds.
+void compact_manifest(const fs::path& file, const std::vector<graph::ManifestRecord>& records,
+                      const std::vector<Item>& items, bool keep_others) {
+  const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
+  std::map<std::string, const graph::ManifestRecord*> by_input;
+  for (const graph::ManifestRecord& r : latest) by_input[r.input] = &r;
+  graph::write_file_atomically(file, [&](std::ostream& os) {
+    std::set<std::string> written;
+    for (const Item& item : items) {
+      const auto it = by_input.find(item.input.string());
+      if (it == by_input.end()) continue;
+      os << graph::manifest_line(*it->second) << '\n';
+      written.insert(it->first);
+    }
+    if (!keep_others) return;
+    for (const auto& [input, record] : by_input)
+      if (!written.count(input)) os << graph::manifest_line(*record) << '\n';
+  });
+}
+
+std::string this_host() {
+  char name[256] = {};
+  if (::gethostname(name, sizeof name - 1) != 0) return "";
+  return name;
+}
+
+}  // namespace
+
+int batch(Host& host, const Options& o, const char* argv0) {
+  const Clock::time_point start = Clock::now();
+  Batch b(o);
+  b.graph = fs::absolute(o.graph).lexically_normal();
+  b.dir = fs::absolute(o.out).lexically_normal();
+  b.shard = shard_text(o.shard);
+  b.host_name = this_host();
+
+  std::error_code ec;
+  if (!fs::is_regular_file(b.graph, ec)) throw Failure{kExitGraphInvalid, o.graph.string() + ": no such graph file"};
+  std::vector<graph::Variable> declared;
+  try {
+    declared = graph::read_graph_variables(b.graph);
+  } catch (const std::exception& e) {
+    throw Failure{kExitGraphInvalid, e.what()};
+  }
+  auto declares = [&](const std::string& name) {
+    return std::any_of(declared.begin(), declared.end(), [&](const graph::Variable& v) { return v.name == name; });
+  };
+  if (!declares("input")) {
+    throw Failure{kExitGraphInvalid, o.graph.string() +
+                                         ": declares no variable 'input', so it cannot run once per input file "
+                                         "(batch gives each item the variables input, stem and out)"};
+  }
+  b.declares_stem = declares("stem");
+  b.declares_out = declares("out");
+
+  const std::vector<Item> all = items_of(inputs_of(o));
+  if (!b.declares_out && all.size() > 1) {
+    throw Failure{kExitGraphInvalid,
+                  o.graph.string() + ": declares no variable 'out', so every item would write the same outputs; "
+                                     "declare it and default the outputs from it (output: ${out}/${stem}.bvh)"};
+  }
+
+  if (!o.slurm.empty()) {
+    std::vector<fs::path> inputs;
+    for (const Item& item : all) inputs.push_back(item.input);
+    return write_slurm_jobs(o, b.graph, b.dir, inputs, executable_path(argv0));
+  }
+
+  std::vector<Item> items = shard_of(all, o.shard);
+  // The whole graph is checked once, on the first item, before anything runs.
+  if (!items.empty()) load_graph(host, b.graph, b.variables(items.front()));
+  b.graph_sha256 = graph::sha256_file(b.graph);
+  std::vector<std::pair<std::string, std::string>> settings(o.sets.begin(), o.sets.end());
+  b.settings_sha256 = graph::settings_sha256(settings);
+
+  fs::create_directories(b.dir / "logs", ec);
+  if (ec) throw Failure{kExitUsage, "--out " + o.out.string() + ": cannot create it: " + ec.message()};
+  std::vector<graph::ManifestRecord> records = read_manifests(b.dir);
+  const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
+  std::map<std::string, const graph::ManifestRecord*> previous;
+  for (const graph::ManifestRecord& r : latest) previous[r.input] = &r;
+
+  std::vector<Item*> todo;
+  for (Item& item : items) {
+    const auto it = previous.find(item.input.string());
+    if (o.force || it == previous.end() || !still_done(*it->second, item, b)) todo.push_back(&item);
+  }
+  const int jobs = o.jobs_given ? o.jobs : cores_available();
+  const std::size_t skipped = items.size() - todo.size();
+  std::cerr << "kinegraph: batch: " << items.size() << " item(s)" << (o.shard ? " in shard " + b.shard : "") << ", "
+            << skipped << " already done, " << todo.size() << " to run on " << std::min<std::size_t>(jobs, todo.size())
+            << " worker(s); output in " << b.dir.string() << '\n';
+
+  const fs::path manifest = manifest_path(b.dir, o.shard);
+  const int manifest_fd = ::open(manifest.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (manifest_fd < 0) throw Failure{kExitUsage, manifest.string() + ": cannot open it: " + std::strerror(errno)};
+  Outcome outcome;
+  try {
+    outcome = run_items(host, b, todo, jobs, manifest_fd);
+  } catch (...) {
+    ::close(manifest_fd);
+    throw;
+  }
+  ::close(manifest_fd);
+  records.insert(records.end(), outcome.records.begin(), outcome.records.end());
+  compact_manifest(manifest, records, items, !o.shard);
+
+  std::size_t failed = 0;
+  for (const graph::ManifestRecord& r : outcome.records) failed += !r.ok();
+  const double wall = since(start);
+  std::cout << "kinegraph: batch: " << outcome.records.size() << " ran (" << outcome.records.size() - failed << " ok, "
+            << failed << " failed), " << skipped << " already done";
+  if (outcome.records.size() < todo.size()) std::cout << ", " << todo.size() - outcome.records.size() << " not run";
+  std::cout << " in " << seconds(wall) << "; manifest " << manifest.string() << '\n';
+  if (failed) {
+    std::cerr << "kinegraph: batch: " << failed << " item(s) failed:\n";
+    for (const graph::ManifestRecord& r : outcome.records)
+      if (!r.ok()) std::cerr << "  " << r.input << ": " << r.message << " (log: " << (b.dir / r.log).string() << ")\n";
+  }
+  if (outcome.stopped) {
+    std::cerr << "kinegraph: batch: interrupted; the same command continues where this one stopped\n";
+    return kExitInterrupted;
+  }
+  if (outcome.interrupted) {
+    std::cerr << "kinegraph: batch: " << outcome.interrupted
+              << " item(s) were stopped by a signal from outside; the same command runs them again\n";
+    return kExitNodeFailed;
+  }
+  return failed ? kExitNodeFailed : kExitOk;
+}
+
+int merge(const Options& o) {
+  const fs::path dir = fs::absolute(o.out).lexically_normal();
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) throw Failure{kExitUsage, "merge: " + o.out.string() + ": no such folder"};
+  const std::vector<graph::ManifestRecord> records = read_manifests(dir);
+  std::vector<Item> expected;
+  const fs::path list = dir / "inputs.txt";
+  if (fs::exists(list, ec)) {
+    Options listed;
+    listed.input_list = list;
+    expected = items_of(inputs_of(listed));
+  }
+  const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
+  if (latest.empty() && expected.empty()) throw Failure{kExitUsage, "merge: " + dir.string() + " holds no manifest"};
+  const fs::path manifest = dir / "manifest.jsonl";
+  compact_manifest(manifest, records, expected, true);
+
+  std::set<std::string> recorded;
+  std::size_t ok = 0;
+  std::vector<const graph::ManifestRecord*> failed;
+  for (const graph::ManifestRecord& r : latest) {
+    recorded.insert(r.input);
+    if (r.ok()) ++ok;
+    else failed.push_back(&r);
+  }
+  std::vector<std::string> missing;
+  for (const Item& item : expected)
+    if (!recorded.count(item.input.string())) missing.push_back(item.input.string());
+  std::cout << "kinegraph: merge: " << latest.size() << " item(s) in " << manifest.string() << ": " << ok << " ok, "
+            << failed.size() << " failed";
+  if (!expected.empty()) std::cout << ", " << missing.size() << " of " << expected.size() << " inputs without a record";
+  std::cout << '\n';
+  for (const graph::ManifestRecord* r : failed)
+    std::cerr << "  failed: " << r->input << ": " << r->message << " (log: " << (dir / r->log).string() << ")\n";
+  for (const std::string& input : missing) std::cerr << "  no record: " << input << '\n';
+  return failed.empty() && missing.empty() ? kExitOk : kExitNodeFailed;
+}
+
+}  // namespace kg::app

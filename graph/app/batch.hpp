@@ -1,0 +1,23 @@
+// `kinegraph batch`: one saved graph over many input files, each item in its own process forked
+// from this one (plugins are loaded once, a crash stays within its item, and every item starts
+// from the same state, so its outputs do not depend on which items ran before it or where);
+// `kinegraph merge`: the manifests of a batch's shards into one. Layout of DIR:
+//
+//   DIR/STEM/...                 what the graph writes under ${out}
+//   DIR/logs/STEM.log            everything the item printed
+//   DIR/manifest.jsonl           manifest.hpp; DIR/manifest.shard-I-of-N.jsonl for --shard I/N
+//   DIR/inputs.txt, DIR/slurm/   with --slurm: the frozen input list and the jobs' own logs
+#pragma once
+
+#include "host.hpp"
+#include "options.hpp"
+
+namespace kg::app {
+
+// Returns the exit code (options.hpp); throws Failure for a usage, graph or plugin problem found
+// before any item runs.
+int batch(Host& host, const Options& o, const char* argv0);
+
+int merge(const Options& o);
+
+}  // namespace kg::app
