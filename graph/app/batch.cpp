@@ -43,7 +43,8 @@ double since(Clock::time_point start) { return std::chrono::duration<double>(Clo
 
 struct Item {
   fs::path input;            // absolute
-  std::string stem;
+  std::string stem;          // the input's file name without extension
+  fs::path name;             // its folders below the inputs' common folder, then the stem
   std::string input_sha256;  // filled when a previous record had to be checked
 };
 
@@ -68,18 +69,35 @@ std::vector<fs::path> inputs_of(const Options& o) {
   }
 }
 
-// Stems name the items' folders and logs, so two inputs may not share one.
+fs::path common_folder(const std::vector<fs::path>& inputs) {
+  if (inputs.empty()) return {};
+  fs::path common = inputs.front().parent_path();
+  for (const fs::path& input : inputs) {
+    while (!common.empty() && common != common.root_path()) {
+      const fs::path relative = input.parent_path().lexically_relative(common);
+      if (!relative.empty() && *relative.begin() != "..") break;
+      common = common.parent_path();
+    }
+  }
+  return common;
+}
+
+// Item folders and logs mirror the inputs' folders below their common folder, so that
+// walk.bvh of subject01/ and of subject02/ each have their own (subject01/walk, subject02/walk);
+// inputs of one folder differing only in extension would share one and are refused.
 std::vector<Item> items_of(const std::vector<fs::path>& inputs) {
+  const fs::path common = common_folder(inputs);
   std::vector<Item> items;
-  std::map<std::string, fs::path> by_stem;
+  std::map<fs::path, fs::path> by_name;
   for (const fs::path& input : inputs) {
     const std::string stem = input.stem().string();
-    const auto [it, fresh] = by_stem.emplace(stem, input);
+    const fs::path name = input.parent_path().lexically_relative(common) / stem;
+    const auto [it, fresh] = by_name.emplace(name.lexically_normal(), input);
     if (!fresh) {
-      throw Failure{kExitUsage, "inputs " + it->second.string() + " and " + input.string() + " share the name '" +
-                                    stem + "', so their outputs and logs would collide: batch them separately"};
+      throw Failure{kExitUsage, "inputs " + it->second.string() + " and " + input.string() + " differ only in " +
+                                    "their extension, so their outputs and logs would collide: batch them separately"};
     }
-    items.push_back({input, stem, {}});
+    items.push_back({input, stem, name.lexically_normal(), {}});
   }
   return items;
 }
@@ -142,13 +160,13 @@ struct Batch {
     std::map<std::string, std::string> sets = o.sets;
     sets["input"] = item.input.string();
     if (declares_stem) sets["stem"] = item.stem;
-    if (declares_out) sets["out"] = (dir / item.stem).string();
+    if (declares_out) sets["out"] = (dir / item.name).string();
     return sets;
   }
-  fs::path log(const Item& item) const { return dir / "logs" / (item.stem + ".log"); }
+  fs::path log(const Item& item) const { return dir / "logs" / (item.name.string() + ".log"); }
   // Beside the log, named after the process writing it: renamed over the log when the item ends.
   fs::path partial_log(const Item& item, pid_t pid) const {
-    return dir / "logs" / ("." + item.stem + ".log.tmp." + std::to_string(pid));
+    return log(item).parent_path() / ("." + item.stem + ".log.tmp." + std::to_string(pid));
   }
 };
 
@@ -195,6 +213,8 @@ bool write_all(int fd, const std::string& text) {
 [[noreturn]] void run_item(Host& host, const Batch& b, const Item& item, int result_fd) {
   const Clock::time_point start = Clock::now();
   const fs::path partial = b.partial_log(item, ::getpid());
+  std::error_code ec;
+  fs::create_directories(partial.parent_path(), ec);
   std::snprintf(g_partial_log, sizeof g_partial_log, "%s", partial.c_str());
   struct sigaction action {};
   action.sa_handler = item_interrupted;
@@ -214,6 +234,7 @@ bool write_all(int fd, const std::string& text) {
   graph::ManifestRecord r;
   r.input = item.input.string();
   r.stem = item.stem;
+  r.item = item.name.generic_string();
   r.log = relative_to(b.log(item), b.dir);
   r.graph_sha256 = b.graph_sha256;
   r.settings_sha256 = b.settings_sha256;
@@ -267,7 +288,6 @@ bool write_all(int fd, const std::string& text) {
             << (r.message.empty() ? "" : ": " + r.message) << '\n';
   std::cout.flush();
   std::cerr.flush();
-  std::error_code ec;
   fs::rename(partial, b.log(item), ec);
   g_partial_log[0] = 0;
   const bool sent = write_all(result_fd, graph::manifest_line(r) + "\n");
@@ -304,13 +324,13 @@ class Progress {
     ++done_;
     failed_ += !r.ok();
     if (!terminal_) {
-      std::cerr << "[" << done_ << "/" << total_ << "] " << (r.ok() ? "ok" : "FAILED") << ' ' << r.stem << " ("
+      std::cerr << "[" << done_ << "/" << total_ << "] " << (r.ok() ? "ok" : "FAILED") << ' ' << r.item << " ("
                 << seconds(r.wall_seconds) << ")" << (r.ok() ? "" : ": " + r.message + " (log: " + (dir / r.log).string() + ")")
                 << " · " << failed_ << " failed · " << rate_text() << '\n';
       return;
     }
     if (!r.ok()) {
-      std::cerr << "\r\x1b[K" << "FAILED " << r.stem << ": " << r.message << " (log: " << (dir / r.log).string() << ")\n";
+      std::cerr << "\r\x1b[K" << "FAILED " << r.item << ": " << r.message << " (log: " << (dir / r.log).string() << ")\n";
     }
     draw();
   }
@@ -407,6 +427,7 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
     if (!have) {
       record.input = r.item->input.string();
       record.stem = r.item->stem;
+      record.item = r.item->name.generic_string();
       record.status = "failed";
       if (record.message.empty()) {
         record.message = WIFSIGNALED(status) ? "its process died of " + signal_name(WTERMSIG(status))
@@ -598,11 +619,17 @@ int batch(Host& host, const Options& o, const char* argv0) {
     const auto it = previous.find(item.input.string());
     if (o.force || it == previous.end() || !still_done(*it->second, item, b)) todo.push_back(&item);
   }
+  // Largest inputs first: the items still running when the others are done are then short ones,
+  // which keeps every worker busy to the end (longest-processing-time-first scheduling).
+  std::map<const Item*, std::uintmax_t> sizes;
+  for (const Item* item : todo) sizes[item] = fs::file_size(item->input, ec);
+  std::stable_sort(todo.begin(), todo.end(), [&](const Item* a, const Item* b) { return sizes[a] > sizes[b]; });
   const int jobs = o.jobs_given ? o.jobs : cores_available();
   const std::size_t skipped = items.size() - todo.size();
   std::cerr << "kinegraph: batch: " << items.size() << " item(s)" << (o.shard ? " in shard " + b.shard : "") << ", "
-            << skipped << " already done, " << todo.size() << " to run on " << std::min<std::size_t>(jobs, todo.size())
-            << " worker(s); output in " << b.dir.string() << '\n';
+            << skipped << " already done, " << todo.size() << " to run";
+  if (!todo.empty()) std::cerr << " on " << std::min<std::size_t>(jobs, todo.size()) << " worker(s)";
+  std::cerr << "; output in " << b.dir.string() << '\n';
 
   const fs::path manifest = manifest_path(b.dir, o.shard);
   const int manifest_fd = ::open(manifest.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);

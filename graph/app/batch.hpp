@@ -3,8 +3,9 @@
 // from the same state, so its outputs do not depend on which items ran before it or where);
 // `kinegraph merge`: the manifests of a batch's shards into one. Layout of DIR:
 //
-//   DIR/STEM/...                 what the graph writes under ${out}
-//   DIR/logs/STEM.log            everything the item printed
+//   DIR/ITEM/...                 what the graph writes under ${out}; ITEM is the input's stem, below
+//                                the folders that lead to it from the inputs' common folder
+//   DIR/logs/ITEM.log            everything the item printed
 //   DIR/manifest.jsonl           manifest.hpp; DIR/manifest.shard-I-of-N.jsonl for --shard I/N
 //   DIR/inputs.txt, DIR/slurm/   with --slurm: the frozen input list and the jobs' own logs
 #pragma once

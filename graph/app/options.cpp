@@ -82,7 +82,9 @@ verbs:
             kinegraph dot GRAPH | dot -Tsvg > graph.svg
   batch     run GRAPH once per input file, up to --jobs items at once, each in its own process
             with the variables input (the file), stem (its name without extension) and out
-            (DIR/stem, the item's folder). Writes DIR/logs/STEM.log per item and a manifest,
+            (the item's folder: DIR/stem, or DIR/sub/stem for an input in sub/ below the
+            inputs' common folder). Largest inputs start first. Writes DIR/logs/ITEM.log per
+            item and a manifest,
             DIR/manifest.jsonl (DIR/manifest.shard-I-of-N.jsonl with --shard), one JSON line per
             item: status, wall time, outputs with their SHA-256, the figures the graph reports,
             and the hashes of input, graph and settings. Items already done with the same

@@ -51,6 +51,7 @@ ManifestRecord record_of(const YAML::Node& object) {
   ManifestRecord r;
   r.input = text_field(object, "input");
   r.stem = text_field(object, "stem");
+  r.item = text_field(object, "item", false);
   r.status = text_field(object, "status");
   if (r.status != "ok" && r.status != "failed")
     throw std::runtime_error("\"status\" is '" + r.status + "', expected ok or failed");
@@ -88,6 +89,7 @@ std::string manifest_line(const ManifestRecord& r) {
   w.begin_object();
   w.field("input", r.input);
   w.field("stem", r.stem);
+  w.field("item", r.item);
   w.field("status", r.status);
   w.field("message", r.message);
   w.field("wall_seconds", r.wall_seconds);

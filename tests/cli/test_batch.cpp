@@ -74,7 +74,7 @@ std::map<std::string, YAML::Node> manifest(const fs::path& file) {
   std::istringstream lines(read_file(file));
   for (std::string line; std::getline(lines, line);) {
     const YAML::Node r = YAML::Load(line);
-    records[r["stem"].as<std::string>()] = r;
+    records[r["item"].as<std::string>()] = r;
   }
   return records;
 }
@@ -325,10 +325,26 @@ TEST_CASE("Ctrl-C stops the batch at once, leaves no partial output, and the sam
   CHECK_THAT(again.out, Contains("4 ran (4 ok, 0 failed)"));
 }
 
+TEST_CASE("item folders mirror the inputs' folders, so equal names in different folders do not collide",
+          "[batch]") {
+  Setup s;
+  s.input("subject1/walk.txt", "1");
+  s.input("subject2/walk.txt", "2");
+  s.input("subject2/deeper/run.txt", "3");
+  const Result r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "**" / "*.txt").string(),
+                              "--out", s.out.string(), "--plugin-dir", kTestPlugins});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  CHECK(read_file(s.out / "subject1" / "walk" / "walk.txt") == "2\n");
+  CHECK(read_file(s.out / "subject2" / "walk" / "walk.txt") == "4\n");
+  CHECK(read_file(s.out / "subject2" / "deeper" / "run" / "run.txt") == "6\n");
+  CHECK(fs::exists(s.out / "logs" / "subject2" / "deeper" / "run.log"));
+  CHECK(temporaries(s.out).empty());
+}
+
 TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
   Setup s;
   s.input("a.txt", "1");
-  s.input("sub/a.txt", "2");
 
   Result r = s.batch({"--set", "stem=x"});
   CHECK(r.code == 2);
@@ -339,10 +355,11 @@ TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("matches no file"));
 
-  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "**" / "*.txt").string(), "--out",
-                 s.out.string(), "--plugin-dir", kTestPlugins});
+  s.input("a.dat", "3");
+  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "a.*").string(), "--out", s.out.string(),
+                 "--plugin-dir", kTestPlugins});
   CHECK(r.code == 2);
-  CHECK_THAT(r.err, Contains("share the name 'a'"));
+  CHECK_THAT(r.err, Contains("differ only in their extension"));
 
   r = s.batch({"--shard", "2/2"});
   CHECK(r.code == 2);

@@ -58,7 +58,7 @@ std::map<std::string, YAML::Node> manifest(const fs::path& file) {
   std::istringstream lines(read_file(file));
   for (std::string line; std::getline(lines, line);) {
     const YAML::Node r = YAML::Load(line);
-    records[r["stem"].as<std::string>()] = r;
+    records[r["item"].as<std::string>()] = r;
   }
   return records;
 }

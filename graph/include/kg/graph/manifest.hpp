@@ -3,7 +3,7 @@
 // line is skipped with a warning). Later lines supersede earlier ones for the same input; a batch
 // compacts its manifest to one line per item when it ends.
 //
-//   {"input":"/data/16_15.bvh","stem":"16_15","status":"ok","message":"","wall_seconds":1.2,
+//   {"input":"/data/16_15.bvh","stem":"16_15","item":"16_15","status":"ok","message":"","wall_seconds":1.2,
 //    "graph_seconds":1.1,"log":"logs/16_15.log","outputs":[{"path":"16_15/16_15.bvh",
 //    "sha256":"...","bytes":81234}],"figures":{"solve.iterations":12},"input_sha256":"...",
 //    "graph_sha256":"...","settings_sha256":"...","finished_at":"2026-11-22T07:00:00Z",
@@ -28,7 +28,8 @@ struct ManifestOutput {
 
 struct ManifestRecord {
   std::string input;   // absolute path: the item's key
-  std::string stem;
+  std::string stem;    // the input's name without extension (the graph's ${stem})
+  std::string item;    // its folder and log name below the batch folder, e.g. "bvh_daz/07_05"
   std::string status;  // "ok" or "failed"
   std::string message;  // why it failed; empty when ok
   double wall_seconds = 0;   // the item's whole time: graph loading, run, hashing outputs
