@@ -342,6 +342,28 @@ TEST_CASE("item folders mirror the inputs' folders, so equal names in different 
   CHECK(temporaries(s.out).empty());
 }
 
+TEST_CASE("on a terminal, batch redraws one progress bar with counts, rate and ETA", "[batch]") {
+  if (!fs::exists("/usr/bin/script")) {
+    WARN("skipped: no /usr/bin/script (util-linux) to give batch a terminal");
+    return;
+  }
+  Setup s;
+  for (int i = 0; i < 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
+  s.input("bad.txt", "x");
+  std::string command = (fs::path(KG_BINARY_DIR) / "bin" / "kinegraph").string();
+  for (const std::string& arg : {std::string("batch"), s.graph.string(), std::string("--inputs"),
+                                 (s.dir / "in" / "*.txt").string(), std::string("--out"), s.out.string(),
+                                 std::string("--plugin-dir"), kTestPlugins})
+    command += " '" + arg + "'";
+  const Result r = kg::test::run_program("/usr/bin/script", {"-qec", command, "/dev/null"}, {"TERM=xterm"});
+  INFO(show(r));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.out, Contains("\r\x1b[K[##############################] 4/4 · 1 failed · "));
+  CHECK_THAT(r.out, Contains(" items/s · ETA "));
+  CHECK_THAT(r.out, Contains("FAILED bad: "));
+  CHECK_THAT(r.out, !Contains("[4/4]"));  // no per-item lines on a terminal
+}
+
 TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
   Setup s;
   s.input("a.txt", "1");
