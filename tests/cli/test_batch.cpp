@@ -21,6 +21,7 @@
 #include <yaml-cpp/yaml.h>
 #include <catch2/catch.hpp>
 
+#include "../support/manifest.hpp"
 #include "../support/process.hpp"
 #include "kg/graph/sha256.hpp"
 
@@ -29,6 +30,7 @@ namespace {
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using kg::test::kinegraph;
+using kg::test::manifest_by_item;
 using kg::test::read_file;
 using kg::test::Result;
 using kg::test::show;
@@ -68,17 +70,6 @@ struct Setup {
   }
 };
 
-// The manifest's records by stem.
-std::map<std::string, YAML::Node> manifest(const fs::path& file) {
-  std::map<std::string, YAML::Node> records;
-  std::istringstream lines(read_file(file));
-  for (std::string line; std::getline(lines, line);) {
-    const YAML::Node r = YAML::Load(line);
-    records[r["item"].as<std::string>()] = r;
-  }
-  return records;
-}
-
 std::size_t line_count(const fs::path& file) {
   const std::string text = read_file(file);
   return static_cast<std::size_t>(std::count(text.begin(), text.end(), '\n'));
@@ -105,7 +96,7 @@ TEST_CASE("batch runs the graph once per input, in parallel, with a log and a ma
   REQUIRE(r.code == 0);
   CHECK_THAT(r.err, Contains("[6/6] ok"));
   CHECK_THAT(r.out, Contains("6 ran (6 ok, 0 failed)"));
-  const auto records = manifest(s.out / "manifest.jsonl");
+  const auto records = manifest_by_item(s.out / "manifest.jsonl");
   REQUIRE(records.size() == 6);
   for (int i = 1; i <= 6; ++i) {
     const std::string stem = "n" + std::to_string(i);
@@ -134,7 +125,7 @@ TEST_CASE("a malformed input or a crashing node fails its item only, and the bat
   INFO(show(r));
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Contains("2 item(s) failed"));
-  const auto records = manifest(s.out / "manifest.jsonl");
+  const auto records = manifest_by_item(s.out / "manifest.jsonl");
   REQUIRE(records.size() == 4);
   CHECK(records.at("a")["status"].as<std::string>() == "ok");
   CHECK(records.at("d")["status"].as<std::string>() == "ok");
@@ -199,8 +190,8 @@ TEST_CASE("shards split the items deterministically and merge recovers the whole
   INFO(show(first) << show(second));
   REQUIRE(first.code == 0);
   REQUIRE(second.code == 0);
-  const auto shard0 = manifest(s.out / "manifest.shard-0-of-2.jsonl");
-  const auto shard1 = manifest(s.out / "manifest.shard-1-of-2.jsonl");
+  const auto shard0 = manifest_by_item(s.out / "manifest.shard-0-of-2.jsonl");
+  const auto shard1 = manifest_by_item(s.out / "manifest.shard-1-of-2.jsonl");
   CHECK(shard0.size() == 3);  // n0 n2 n4
   CHECK(shard1.size() == 2);  // n1 n3
   CHECK(shard0.count("n0") + shard0.count("n2") + shard0.count("n4") == 3);
@@ -210,7 +201,7 @@ TEST_CASE("shards split the items deterministically and merge recovers the whole
   INFO(show(merged));
   CHECK(merged.code == 0);
   CHECK_THAT(merged.out, Contains("5 item(s)"));
-  CHECK(manifest(s.out / "manifest.jsonl").size() == 5);
+  CHECK(manifest_by_item(s.out / "manifest.jsonl").size() == 5);
 
   // The shards' work counts as done for an unsharded run over the same folder.
   const Result whole = s.batch({});
@@ -255,8 +246,8 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
   const Result r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
                               local.string(), "--plugin-dir", kTestPlugins, "--set", "write_seconds=0"});
   REQUIRE(r.code == 0);
-  const auto cluster = manifest(s.out / "manifest.jsonl");
-  const auto here = manifest(local / "manifest.jsonl");
+  const auto cluster = manifest_by_item(s.out / "manifest.jsonl");
+  const auto here = manifest_by_item(local / "manifest.jsonl");
   REQUIRE(cluster.size() == 5);
   for (const auto& [stem, record] : here) {
     CHECK(cluster.at(stem)["outputs"][0]["sha256"].as<std::string>() ==
@@ -315,7 +306,7 @@ TEST_CASE("Ctrl-C stops the batch at once, leaves no partial output, and the sam
   CHECK_THAT(read_file(err_file), Contains("interrupted"));
   CHECK(temporaries(s.dir.path()).empty());
   for (int i = 0; i < 4; ++i) CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".txt")));
-  CHECK(manifest(s.out / "manifest.jsonl").empty());
+  CHECK(manifest_by_item(s.out / "manifest.jsonl").empty());
 
   std::vector<std::string> resume = args;
   resume.back() = "write_seconds=0";

@@ -15,6 +15,7 @@
 #include <yaml-cpp/yaml.h>
 #include <catch2/catch.hpp>
 
+#include "../support/manifest.hpp"
 #include "../support/process.hpp"
 #include "kg/graph/sha256.hpp"
 
@@ -23,6 +24,7 @@ namespace {
 namespace fs = std::filesystem;
 using Catch::Matchers::Contains;
 using kg::test::kinegraph;
+using kg::test::manifest_by_item;
 using kg::test::read_file;
 using kg::test::Result;
 using kg::test::run_program;
@@ -52,16 +54,6 @@ class Cluster {
   fs::path dir_;
   Result started_;
 };
-
-std::map<std::string, YAML::Node> manifest(const fs::path& file) {
-  std::map<std::string, YAML::Node> records;
-  std::istringstream lines(read_file(file));
-  for (std::string line; std::getline(lines, line);) {
-    const YAML::Node r = YAML::Load(line);
-    records[r["item"].as<std::string>()] = r;
-  }
-  return records;
-}
 
 }  // namespace
 
@@ -101,7 +93,7 @@ TEST_CASE("batch --slurm --submit on a real Slurm cluster gives the local batch'
   CHECK_THAT(tasks.out, Contains("ArrayTaskId=3"));
   CHECK_THAT(read_file(out / "slurm" / ("merge_" + merge_job + ".out")), Contains("0 of "));
 
-  const auto on_cluster = manifest(out / "manifest.jsonl");
+  const auto on_cluster = manifest_by_item(out / "manifest.jsonl");
   REQUIRE(on_cluster.size() >= 8);
   std::set<std::string> shards;
   for (const auto& [stem, record] : on_cluster) {
@@ -118,7 +110,7 @@ TEST_CASE("batch --slurm --submit on a real Slurm cluster gives the local batch'
       {"batch", graph, "--inputs", clips, "--out", local.string(), "--jobs", "2", "--set", "resample=30"});
   INFO(show(here));
   REQUIRE(here.code == 0);
-  const auto on_this_machine = manifest(local / "manifest.jsonl");
+  const auto on_this_machine = manifest_by_item(local / "manifest.jsonl");
   REQUIRE(on_this_machine.size() == on_cluster.size());
   for (const auto& [stem, record] : on_this_machine) {
     INFO(stem);

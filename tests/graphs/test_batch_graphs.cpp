@@ -10,6 +10,7 @@
 #include <yaml-cpp/yaml.h>
 #include <catch2/catch.hpp>
 
+#include "../support/manifest.hpp"
 #include "../support/process.hpp"
 #include "kg/graph/sha256.hpp"
 
@@ -18,6 +19,7 @@ namespace {
 namespace fs = std::filesystem;
 using Catch::Matchers::StartsWith;
 using kg::test::kinegraph;
+using kg::test::manifest_by_item;
 using kg::test::read_file;
 using kg::test::Result;
 using kg::test::show;
@@ -25,16 +27,6 @@ using kg::test::TempDir;
 
 const fs::path kSource = KG_SOURCE_DIR;
 const fs::path kData = KG_DATA_DIR;
-
-std::map<std::string, YAML::Node> manifest(const fs::path& file) {
-  std::map<std::string, YAML::Node> records;
-  std::istringstream lines(read_file(file));
-  for (std::string line; std::getline(lines, line);) {
-    const YAML::Node r = YAML::Load(line);
-    records[r["item"].as<std::string>()] = r;
-  }
-  return records;
-}
 
 }  // namespace
 
@@ -81,8 +73,8 @@ TEST_CASE("batch of graphs/retarget.yaml over CMU clips: outputs below each item
   INFO(show(first) << show(second));
   REQUIRE(first.code == 0);
   REQUIRE(second.code == 0);
-  const auto a = manifest(dir / "first" / "manifest.jsonl");
-  const auto b = manifest(dir / "second" / "manifest.jsonl");
+  const auto a = manifest_by_item(dir / "first" / "manifest.jsonl");
+  const auto b = manifest_by_item(dir / "second" / "manifest.jsonl");
   REQUIRE(a.size() == 2);
   for (const auto& [item, record] : a) {
     INFO(item);
