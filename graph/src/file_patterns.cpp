@@ -28,7 +28,8 @@ void walk(const fs::path& dir, const std::vector<std::string>& components, std::
     walk(dir, components, index + 1, found);
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
-      if (name.front() != '.' && it->is_directory(ec)) walk(it->path(), components, index, found);
+      // Links are not followed, as bash's globstar: a link to an ancestor would recurse forever.
+      if (name.front() != '.' && !it->is_symlink(ec) && it->is_directory(ec)) walk(it->path(), components, index, found);
     }
     return;
   }

@@ -1,3 +1,4 @@
+#include <algorithm>
 #include "kg/graph/json.hpp"
 
 #include <cmath>
@@ -115,6 +116,8 @@ void JsonWriter::value(double number) {
   char buf[64];
   auto [end, ec] = std::to_chars(buf, buf + sizeof buf, number);
   os_.write(buf, end - buf);
+  // A whole double keeps a fraction ("2.0"), so that a reader tells it from an integer.
+  if (std::find_if(buf, end, [](char c) { return c == '.' || c == 'e'; }) == end) os_ << ".0";
 }
 
 void JsonWriter::value(std::int64_t number) {

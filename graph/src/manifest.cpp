@@ -36,12 +36,12 @@ double number_field(const YAML::Node& object, const char* key) {
 
 // JSON read through YAML: a quoted scalar is a string; a plain one a bool, whole number or number.
 Figure figure_of(const YAML::Node& value) {
+  if (value.IsNull()) return std::numeric_limits<double>::quiet_NaN();  // the writer's non-finite number
   if (!value.IsScalar()) throw std::runtime_error("a figure is not a single value");
   const std::string& text = value.Scalar();
   if (value.Tag() == "!") return text;
   if (text == "true") return true;
   if (text == "false") return false;
-  if (text == "null") return std::numeric_limits<double>::quiet_NaN();
   if (text.find_first_of(".eE") == std::string::npos) return value.as<std::int64_t>();
   return value.as<double>();
 }

@@ -251,6 +251,8 @@ TEST_CASE("JsonWriter writes nested structures and escapes strings") {
   w.key("list");
   w.begin_array();
   w.value(1.5);
+  w.value(2.0);
+  w.value(-1e22);
   w.begin_object();
   w.end_object();
   w.begin_array();
@@ -261,7 +263,7 @@ TEST_CASE("JsonWriter writes nested structures and escapes strings") {
       os.str() ==
       R"({"s":"a\"b\\c\nd\te\u0001 )"
       "\xc3\xa9"
-      R"(","n":3,"x":0.1,"big":-9007199254740993,"inf":null,"nan":null,"ok":false,"none":null,"list":[1.5,{},[]]})");
+      R"(","n":3,"x":0.1,"big":-9007199254740993,"inf":null,"nan":null,"ok":false,"none":null,"list":[1.5,2.0,-1e+22,{},[]]})");
   CHECK(json_quote("\x7f") == "\"\\u007f\"");
 }
 

@@ -5,6 +5,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <filesystem>
 #include <limits>
@@ -85,6 +86,7 @@ ManifestRecord full_record() {
   ManifestRecord r;
   r.input = "/data/Gänge/walk 01.bvh";
   r.stem = "walk 01";
+  r.item = "Gänge/walk 01";
   r.status = "failed";
   r.message = "solve failed:\n  line \"two\"\twith a tab, a backslash \\ and a CR\r";
   r.wall_seconds = 1.25;
@@ -118,6 +120,7 @@ ManifestRecord full_record() {
 void check_same(const ManifestRecord& got, const ManifestRecord& want) {
   CHECK(got.input == want.input);
   CHECK(got.stem == want.stem);
+  CHECK(got.item == want.item);
   CHECK(got.status == want.status);
   CHECK(got.message == want.message);
   CHECK(got.wall_seconds == want.wall_seconds);
@@ -338,6 +341,12 @@ TEST_CASE("expand_file_patterns: a plain path names one file; symbolic links are
   CHECK(expand_file_patterns({t("b/*.bvh")}) == t.files({"b/link.bvh", "b/w.bvh"}));
   CHECK(expand_file_patterns({t("b/dlink/*.bvh")}) == t.files({"b/dlink/deep.bvh"}));
   CHECK(expand_file_patterns({t("b/link.bvh")}) == t.files({"b/link.bvh"}));
+
+  // ** does not enter a link to a folder: a link to an ancestor would never end.
+  fs::create_directory_symlink(t.dir.path(), t.dir.path() / "c" / "up", ec);
+  REQUIRE_FALSE(ec);
+  const auto all = expand_file_patterns({t("**/deeper.bvh")});
+  CHECK(all == t.files({"c/d/e/deeper.bvh"}));
 }
 
 TEST_CASE("expand_file_patterns: a pattern matching nothing, a missing file and a folder are refused") {
@@ -381,15 +390,24 @@ TEST_CASE("manifest_line and parse_manifest_line round-trip every field on one l
   CHECK_FALSE(parse_manifest_line(line).ok());
 }
 
-TEST_CASE("a whole double figure comes back as an int64, the JSON writer printing it without a fraction") {
+TEST_CASE("a non-finite figure is written as null and reads back as NaN, keeping its line readable") {
+  ManifestRecord r = record("/in/a.bvh", "2026-01-01T00:00:00Z", "h");
+  r.figures = {{"x.nan", std::numeric_limits<double>::quiet_NaN()}, {"x.inf", HUGE_VAL}};
+  const ManifestRecord back = parse_manifest_line(manifest_line(r));
+  REQUIRE(back.figures.size() == 2);
+  CHECK(std::isnan(std::get<double>(back.figures[0].second)));
+  CHECK(std::isnan(std::get<double>(back.figures[1].second)));
+}
+
+TEST_CASE("figures keep their type through the manifest: a whole double is written with a fraction") {
   ManifestRecord r = record("/in/a.bvh", "2026-01-01T00:00:00Z", "h");
   r.figures = {{"x.two", 2.0}, {"x.minus", -3.0}, {"x.half", 2.5}, {"x.large", 1e22}};
   const std::string line = manifest_line(r);
-  CHECK_THAT(line, Catch::Contains("\"x.two\":2,") && Catch::Contains("\"x.minus\":-3,"));
+  CHECK_THAT(line, Catch::Contains("\"x.two\":2.0,") && Catch::Contains("\"x.minus\":-3.0,"));
   const ManifestRecord back = parse_manifest_line(line);
   REQUIRE(back.figures.size() == 4);
-  CHECK(back.figures[0].second == Figure{std::int64_t{2}});
-  CHECK(back.figures[1].second == Figure{std::int64_t{-3}});
+  CHECK(back.figures[0].second == Figure{2.0});
+  CHECK(back.figures[1].second == Figure{-3.0});
   CHECK(back.figures[2].second == Figure{2.5});
   CHECK(back.figures[3].second == Figure{1e22});  // written 1e+22: a double again
 }

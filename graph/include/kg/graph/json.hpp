@@ -27,7 +27,7 @@ class JsonWriter {
   void value(std::string_view text);
   void value(const char* text) { value(std::string_view(text)); }
   void value(const std::string& text) { value(std::string_view(text)); }
-  void value(double number);  // non-finite numbers are written as null
+  void value(double number);  // shortest exact form, "2.0" for a whole one; non-finite as null
   void value(std::int64_t number);
   void value(int number) { value(static_cast<std::int64_t>(number)); }
   void value(std::size_t number) { value(static_cast<std::int64_t>(number)); }
