@@ -3,6 +3,7 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sched.h>
+#include <sys/file.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -17,6 +18,7 @@
 #include <iomanip>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <set>
 #include <sstream>
 #include <string>
@@ -48,8 +50,28 @@ struct Item {
   std::string input_sha256;  // filled when a previous record had to be checked
 };
 
-std::vector<fs::path> inputs_of(const Options& o) {
-  std::vector<std::string> patterns = o.inputs;
+bool valid_utf8(const std::string& text) {
+  for (std::size_t i = 0; i < text.size();) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
+    if (extra < 0 || i + extra >= text.size() + (extra == 0)) return false;
+    for (int k = 1; k <= extra; ++k)
+      if ((static_cast<unsigned char>(text[i + k]) >> 6) != 0x2) return false;
+    i += 1 + extra;
+  }
+  return true;
+}
+
+// The batch's inputs, sorted and each once: files matching --inputs, and the paths of
+// --input-list taken as written (relative to the list's folder), which need not exist yet: a
+// missing one fails its own item. Files inside DIR are left out (earlier outputs).
+std::vector<fs::path> inputs_of(const Options& o, const fs::path& dir) {
+  std::vector<fs::path> inputs;
+  try {
+    if (!o.inputs.empty()) inputs = graph::expand_file_patterns(o.inputs);
+  } catch (const std::invalid_argument& e) {
+    throw Failure{kExitUsage, e.what()};
+  }
   if (!o.input_list.empty()) {
     std::ifstream in(o.input_list);
     if (!in) throw Failure{kExitUsage, "--input-list " + o.input_list.string() + ": cannot open it"};
@@ -59,14 +81,24 @@ std::vector<fs::path> inputs_of(const Options& o) {
       const auto first = line.find_first_not_of(" \t\r");
       if (first == std::string::npos || line[first] == '#') continue;
       line = line.substr(first, line.find_last_not_of(" \t\r") + 1 - first);
-      patterns.push_back(fs::path(line).is_absolute() ? line : (base / line).string());
+      inputs.push_back((fs::path(line).is_absolute() ? fs::path(line) : base / line).lexically_normal());
     }
   }
-  try {
-    return graph::expand_file_patterns(patterns);
-  } catch (const std::invalid_argument& e) {
-    throw Failure{kExitUsage, e.what()};
+  if (inputs.empty()) throw Failure{kExitUsage, "no inputs: --input-list " + o.input_list.string() + " lists none"};
+  std::sort(inputs.begin(), inputs.end());
+  inputs.erase(std::unique(inputs.begin(), inputs.end()), inputs.end());
+  std::vector<fs::path> kept;
+  for (const fs::path& input : inputs) {
+    const fs::path inside = input.lexically_relative(dir);
+    if (!dir.empty() && !inside.empty() && *inside.begin() != "..") continue;
+    if (!valid_utf8(input.string())) {
+      throw Failure{kExitUsage, "input " + input.string() +
+                                    ": its name is not UTF-8, which the JSON manifest cannot record: rename it"};
+    }
+    kept.push_back(input);
   }
+  if (kept.empty()) throw Failure{kExitUsage, "no input left: every file given is inside --out " + dir.string()};
+  return kept;
 }
 
 fs::path common_folder(const std::vector<fs::path>& inputs) {
@@ -170,30 +202,41 @@ struct Batch {
   }
 };
 
-// An item done before counts as done when nothing it depends on changed and its outputs are
-// still there at their recorded sizes.
+// An item done before counts as done when nothing it depends on changed (the graph, the
+// settings, and every file it read: the input, a skeleton, a target, ...) and its outputs are
+// still there with their recorded content.
 bool still_done(const graph::ManifestRecord& r, Item& item, const Batch& b) {
   if (!r.ok() || r.graph_sha256 != b.graph_sha256 || r.settings_sha256 != b.settings_sha256) return false;
-  for (const graph::ManifestOutput& out : r.outputs) {
-    const fs::path path = fs::path(out.path).is_absolute() ? fs::path(out.path) : b.dir / out.path;
+  auto unchanged = [&](const graph::ManifestFile& file) {
+    const fs::path path = fs::path(file.path).is_absolute() ? fs::path(file.path) : b.dir / file.path;
     std::error_code ec;
-    if (fs::file_size(path, ec) != out.bytes || ec) return false;
-  }
+    if (fs::file_size(path, ec) != file.bytes || ec) return false;
+    try {
+      return graph::sha256_file(path) == file.sha256;
+    } catch (const std::exception&) {
+      return false;
+    }
+  };
   try {
     item.input_sha256 = graph::sha256_file(item.input);
   } catch (const std::exception&) {
     return false;
   }
-  return r.input_sha256 == item.input_sha256;
+  return r.input_sha256 == item.input_sha256 && std::all_of(r.reads.begin(), r.reads.end(), unchanged) &&
+         std::all_of(r.outputs.begin(), r.outputs.end(), unchanged);
 }
 
 // ---- one item, in its own process ----------------------------------------------------------------
+
+// What stops a batch and its items: Ctrl-C, kill and scancel, a closed terminal.
+constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP};
 
 // For the signal handler: the item's partial log, removed with the partial outputs.
 char g_partial_log[4096];
 
 extern "C" void item_interrupted(int sig) {
   graph::remove_pending_temporaries();
+  graph::remove_written_files();
   if (g_partial_log[0]) ::unlink(g_partial_log);
   ::signal(sig, SIG_DFL);
   ::raise(sig);
@@ -219,8 +262,7 @@ bool write_all(int fd, const std::string& text) {
   struct sigaction action {};
   action.sa_handler = item_interrupted;
   ::sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, nullptr);
-  ::sigaction(SIGTERM, &action, nullptr);
+  for (int sig : kStopSignals) ::sigaction(sig, &action, nullptr);
 
   const int log_fd = ::open(partial.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (log_fd >= 0) {
@@ -244,6 +286,10 @@ bool write_all(int fd, const std::string& text) {
     r.input_sha256 = item.input_sha256.empty() ? graph::sha256_file(item.input) : item.input_sha256;
     const std::map<std::string, std::string> sets = b.variables(item);
     std::cerr << "kinegraph batch: " << b.graph.string() << " on " << r.input << '\n';
+    if (graph::sha256_file(b.graph) != b.graph_sha256) {
+      throw Failure{kExitGraphInvalid, b.graph.string() + " changed after the batch started (edited?), so this item "
+                                                          "would run another graph: run the batch again"};
+    }
     for (const auto& [name, value] : sets) std::cerr << "  " << name << " = " << value << '\n';
     const graph::Graph g = load_graph(host, b.graph, sets);
     graph::RunOptions options;
@@ -270,18 +316,23 @@ bool write_all(int fd, const std::string& text) {
     r.status = "failed";
     r.message = e.what();
   }
-  for (const fs::path& written : graph::written_files()) {
-    graph::ManifestOutput out;
-    out.path = relative_to(fs::absolute(written).lexically_normal(), b.dir);
+  auto record_file = [&](const fs::path& file, std::vector<graph::ManifestFile>& files) {
+    graph::ManifestFile entry;
+    entry.path = relative_to(fs::absolute(file).lexically_normal(), b.dir);
+    for (const graph::ManifestFile& known : files)
+      if (known.path == entry.path) return;  // written twice
     try {
-      out.sha256 = graph::sha256_file(written);
-      out.bytes = fs::file_size(written);
+      entry.sha256 = graph::sha256_file(file);
+      entry.bytes = fs::file_size(file);
     } catch (const std::exception& e) {
       r.status = "failed";
       r.message += std::string(r.message.empty() ? "" : "; ") + e.what();
     }
-    r.outputs.push_back(std::move(out));
-  }
+    files.push_back(std::move(entry));
+  };
+  for (const fs::path& written : graph::written_files()) record_file(written, r.outputs);
+  for (const fs::path& read : graph::input_files_read())
+    if (read != b.graph) record_file(read, r.reads);
   r.wall_seconds = since(start);
   r.finished_at = graph::utc_timestamp();
   std::cerr << "kinegraph batch: " << r.status << " in " << seconds(r.wall_seconds)
@@ -391,19 +442,42 @@ struct Outcome {
   bool stopped = false;
 };
 
-Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd) {
+// Removes what a worker that died by a signal (SIGKILL from the OOM killer or Slurm) left in its
+// item's folder: the temporaries of its writes in progress, named ".NAME.tmp.PID.N".
+void sweep_temporaries(const fs::path& folder, pid_t pid) {
+  const std::string mark = ".tmp." + std::to_string(pid) + ".";
+  std::error_code ec;
+  for (fs::recursive_directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    const std::string name = it->path().filename().string();
+    if (name.front() == '.' && name.find(mark) != std::string::npos) fs::remove(it->path(), ec);
+  }
+}
+
+// Outputs already claimed, by path as recorded: two items writing one file would overwrite
+// each other (a --set output=... common to all, or two batches' items sharing a folder).
+using Claims = std::map<std::string, std::string>;  // output path -> input
+
+Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd,
+                  Claims& claims) {
   Outcome outcome;
-  if (::pipe2(g_signal_pipe, O_CLOEXEC | O_NONBLOCK) != 0) throw Failure{kExitNodeFailed, "cannot create a pipe"};
-  struct sigaction action {}, old_int {}, old_term {};
+  g_interrupted = 0;
+  if (::pipe2(g_signal_pipe, O_CLOEXEC | O_NONBLOCK) != 0)
+    throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
+  struct sigaction action {};
+  struct sigaction previous[std::size(kStopSignals)];
   action.sa_handler = batch_interrupted;
   ::sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, &old_int);
-  ::sigaction(SIGTERM, &action, &old_term);
+  for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &action, &previous[i]);
+  // Blocked around fork, so that a new item never runs with the batch's handlers.
+  sigset_t stop_signals, unblocked;
+  ::sigemptyset(&stop_signals);
+  for (int sig : kStopSignals) ::sigaddset(&stop_signals, sig);
 
   Progress progress(todo.size(), ::isatty(STDERR_FILENO) && std::getenv("TERM") &&
                                      std::string(std::getenv("TERM")) != "dumb");
   std::vector<Running> running;
   std::size_t next = 0;
+
   auto finish = [&](Running& r, int status) {
     graph::ManifestRecord record;
     bool have = false;
@@ -417,9 +491,11 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
     }
     const fs::path partial = b.partial_log(*r.item, r.pid);
     std::error_code ec;
+    if (!have && WIFSIGNALED(status)) sweep_temporaries(b.dir / r.item->name, r.pid);
     // Stopped from outside (Ctrl-C reaches the whole process group, Slurm's scancel every
     // process of the job): not the item's fault, so no record, and the next run does it again.
-    if (!have && WIFSIGNALED(status) && (WTERMSIG(status) == SIGINT || WTERMSIG(status) == SIGTERM)) {
+    if (!have && WIFSIGNALED(status) &&
+        std::find(std::begin(kStopSignals), std::end(kStopSignals), WTERMSIG(status)) != std::end(kStopSignals)) {
       fs::remove(partial, ec);
       ++outcome.interrupted;
       return;
@@ -442,12 +518,19 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
       record.finished_at = graph::utc_timestamp();
       if (fs::exists(partial, ec)) fs::rename(partial, b.log(*r.item), ec);
     }
+    for (const graph::ManifestFile& output : record.outputs) {
+      const auto [claim, fresh] = claims.emplace(output.path, record.input);
+      if (fresh || claim->second == record.input) continue;
+      record.status = "failed";
+      record.message += std::string(record.message.empty() ? "" : "; ") + "it wrote " + output.path + ", which " +
+                        claim->second + " also writes: the items overwrite each other's outputs (give each its " +
+                        "own ${out}, or this batch another --out)";
+    }
     if (manifest_fd >= 0 && !write_all(manifest_fd, graph::manifest_line(record) + "\n"))
       warn("cannot append to the manifest: " + std::string(std::strerror(errno)));
     progress.item_done(record, b.dir);
     outcome.records.push_back(std::move(record));
   };
-
   auto stop = [&] {
     if (outcome.stopped) return;
     outcome.stopped = true;
@@ -456,79 +539,92 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
               << " running item(s) and removing their partial outputs\n";
     for (const Running& r : running) ::kill(r.pid, SIGTERM);
   };
-  // Blocked around fork, so that a new item never runs with the batch's handlers.
-  sigset_t stop_signals, unblocked;
-  ::sigemptyset(&stop_signals);
-  ::sigaddset(&stop_signals, SIGINT);
-  ::sigaddset(&stop_signals, SIGTERM);
+  auto restore = [&] {
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &previous[i], nullptr);
+    ::close(g_signal_pipe[0]);
+    ::close(g_signal_pipe[1]);
+  };
 
-  g_interrupted = 0;
-  while (true) {
-    if (g_interrupted) stop();
-    while (!outcome.stopped && running.size() < static_cast<std::size_t>(jobs) && next < todo.size()) {
-      int fds[2];
-      if (::pipe2(fds, O_CLOEXEC) != 0) throw Failure{kExitNodeFailed, "cannot create a pipe"};
-      std::cout.flush();
-      std::cerr.flush();
-      ::sigprocmask(SIG_BLOCK, &stop_signals, &unblocked);
-      const pid_t pid = ::fork();
-      if (pid < 0) {
-        const int error = errno;
+  try {
+    while (true) {
+      if (g_interrupted) stop();
+      while (!outcome.stopped && running.size() < static_cast<std::size_t>(jobs) && next < todo.size()) {
+        int fds[2];
+        if (::pipe2(fds, O_CLOEXEC) != 0)
+          throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
+        std::cout.flush();
+        std::cerr.flush();
+        ::sigprocmask(SIG_BLOCK, &stop_signals, &unblocked);
+        const pid_t pid = ::fork();
+        if (pid < 0) {
+          const int error = errno;
+          ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+          ::close(fds[0]);
+          ::close(fds[1]);
+          throw Failure{kExitNodeFailed, std::string("cannot start a process: ") + std::strerror(error)};
+        }
+        if (pid == 0) {
+          for (int sig : kStopSignals) ::signal(sig, SIG_DFL);
+          ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+          ::close(fds[0]);
+          ::close(g_signal_pipe[0]);
+          ::close(g_signal_pipe[1]);
+          if (manifest_fd >= 0) ::close(manifest_fd);
+          for (const Running& other : running) ::close(other.fd);
+          run_item(host, b, *todo[next], fds[1]);
+        }
         ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-        throw Failure{kExitNodeFailed, std::string("cannot start a process: ") + std::strerror(error)};
+        ::close(fds[1]);
+        running.push_back({pid, fds[0], todo[next], {}});
+        ++next;
       }
-      if (pid == 0) {
-        ::signal(SIGINT, SIG_DFL);
-        ::signal(SIGTERM, SIG_DFL);
-        ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-        ::close(fds[0]);
-        ::close(g_signal_pipe[0]);
-        ::close(g_signal_pipe[1]);
-        if (manifest_fd >= 0) ::close(manifest_fd);
-        for (const Running& other : running) ::close(other.fd);
-        run_item(host, b, *todo[next], fds[1]);
-      }
-      ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-      ::close(fds[1]);
-      running.push_back({pid, fds[0], todo[next], {}});
-      ++next;
-    }
-    if (running.empty()) break;
+      if (running.empty()) break;
 
-    std::vector<pollfd> polled;
-    polled.push_back({g_signal_pipe[0], POLLIN, 0});
-    for (const Running& r : running) polled.push_back({r.fd, POLLIN, 0});
-    const int ready = ::poll(polled.data(), polled.size(), 200);
-    if (ready < 0 && errno != EINTR) throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
-    if (polled[0].revents & POLLIN) {
-      unsigned char sig[16];
-      while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
+      std::vector<pollfd> polled;
+      polled.push_back({g_signal_pipe[0], POLLIN, 0});
+      for (const Running& r : running) polled.push_back({r.fd, POLLIN, 0});
+      const int ready = ::poll(polled.data(), polled.size(), 200);
+      if (ready < 0 && errno != EINTR) throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
+      if (ready > 0 && (polled[0].revents & POLLIN)) {
+        unsigned char sig[16];
+        while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
+        }
       }
+      if (g_interrupted) stop();
+      for (std::size_t i = running.size(); ready > 0 && i-- > 0;) {
+        if (!(polled[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+        char buffer[4096];
+        const ssize_t n = ::read(running[i].fd, buffer, sizeof buffer);
+        if (n > 0) {
+          running[i].output.append(buffer, static_cast<std::size_t>(n));
+          continue;
+        }
+        if (n < 0 && errno == EINTR) continue;
+        ::close(running[i].fd);
+        int status = 0;
+        while (::waitpid(running[i].pid, &status, 0) < 0 && errno == EINTR) {
+        }
+        finish(running[i], status);
+        running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
+      }
+      progress.tick();
     }
-    if (g_interrupted) stop();
-    for (std::size_t i = running.size(); i-- > 0;) {
-      if (!(polled[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) continue;
-      char buffer[4096];
-      const ssize_t n = ::read(running[i].fd, buffer, sizeof buffer);
-      if (n > 0) {
-        running[i].output.append(buffer, static_cast<std::size_t>(n));
-        continue;
-      }
-      if (n < 0 && errno == EINTR) continue;
-      ::close(running[i].fd);
+  } catch (...) {
+    // Leave no worker behind: stop them, and keep the records of those that had finished.
+    progress.finish();
+    for (Running& r : running) {
+      ::kill(r.pid, SIGTERM);
+      ::close(r.fd);
       int status = 0;
-      while (::waitpid(running[i].pid, &status, 0) < 0 && errno == EINTR) {
+      while (::waitpid(r.pid, &status, 0) < 0 && errno == EINTR) {
       }
-      finish(running[i], status);
-      running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
+      sweep_temporaries(b.dir / r.item->name, r.pid);
     }
-    progress.tick();
+    restore();
+    throw;
   }
   progress.finish();
-  ::sigaction(SIGINT, &old_int, nullptr);
-  ::sigaction(SIGTERM, &old_term, nullptr);
-  ::close(g_signal_pipe[0]);
-  ::close(g_signal_pipe[1]);
+  restore();
   return outcome;
 }
 
@@ -550,6 +646,43 @@ void compact_manifest(const fs::path& file, const std::vector<graph::ManifestRec
     for (const auto& [input, record] : by_input)
       if (!written.count(input)) os << graph::manifest_line(*record) << '\n';
   });
+}
+
+// One process writes a manifest at a time: a second batch into the same DIR (or shard) would
+// append to a file the first one replaces when it compacts, losing records.
+class ManifestLock {
+ public:
+  ManifestLock(const fs::path& manifest, const std::string& host) {
+    const fs::path file = manifest.parent_path() / ("." + manifest.filename().string() + ".lock");
+    fd_ = ::open(file.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw Failure{kExitUsage, file.string() + ": cannot open it: " + std::strerror(errno)};
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      char holder[256] = {};
+      [[maybe_unused]] const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
+      ::close(fd_);
+      throw Failure{kExitUsage, "another batch (" + std::string(holder) + ") is writing " + manifest.string() +
+                                    ": wait for it, or give this one another --out"};
+    }
+    const std::string me = "pid " + std::to_string(::getpid()) + " on " + host;
+    if (::ftruncate(fd_, 0) == 0) write_all(fd_, me);
+  }
+  ~ManifestLock() { ::close(fd_); }
+  ManifestLock(const ManifestLock&) = delete;
+  ManifestLock& operator=(const ManifestLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
+// For appending one line per record. A file edited by hand may lack its last newline: one is
+// added first, so the next record starts a line of its own.
+int open_for_appending(const fs::path& manifest) {
+  const int fd = ::open(manifest.c_str(), O_RDWR | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
+  if (fd < 0) throw Failure{kExitUsage, manifest.string() + ": cannot open it: " + std::strerror(errno)};
+  const off_t size = ::lseek(fd, 0, SEEK_END);
+  char last = '\n';
+  if (size > 0 && ::pread(fd, &last, 1, size - 1) == 1 && last != '\n') write_all(fd, "\n");
+  return fd;
 }
 
 std::string this_host() {
@@ -587,28 +720,48 @@ int batch(Host& host, const Options& o, const char* argv0) {
   b.declares_stem = declares("stem");
   b.declares_out = declares("out");
 
-  const std::vector<Item> all = items_of(inputs_of(o));
+  const std::vector<Item> all = items_of(inputs_of(o, b.dir));
   if (!b.declares_out && all.size() > 1) {
     throw Failure{kExitGraphInvalid,
                   o.graph.string() + ": declares no variable 'out', so every item would write the same outputs; "
                                      "declare it and default the outputs from it (output: ${out}/${stem}.bvh)"};
   }
+  // The whole graph is checked once, on the first item, before anything runs or is submitted.
+  load_graph(host, b.graph, b.variables(all.front()));
+  b.graph_sha256 = graph::sha256_file(b.graph);
+  std::vector<std::pair<std::string, std::string>> settings(o.sets.begin(), o.sets.end());
+  b.settings_sha256 = graph::settings_sha256(settings);
+  const fs::path identity_file = b.dir / "batch.json";
 
   if (!o.slurm.empty()) {
     std::vector<fs::path> inputs;
     for (const Item& item : all) inputs.push_back(item.input);
+    fs::create_directories(b.dir, ec);
+    graph::write_batch_identity(identity_file, {b.graph.string(), b.graph_sha256, b.settings_sha256});
     return write_slurm_jobs(o, b.graph, b.dir, inputs, executable_path(argv0));
+  }
+  // An array task of jobs written by --slurm runs the batch they were written for, or nothing.
+  if (o.shard && !o.input_list.empty() && fs::absolute(o.input_list).lexically_normal() == b.dir / "inputs.txt" &&
+      fs::exists(identity_file, ec)) {
+    graph::BatchIdentity expected;
+    try {
+      expected = graph::read_batch_identity(identity_file);
+    } catch (const std::exception& e) {
+      throw Failure{kExitUsage, e.what()};
+    }
+    if (expected.graph_sha256 != b.graph_sha256 || expected.settings_sha256 != b.settings_sha256) {
+      throw Failure{kExitGraphInvalid, o.graph.string() + " or the --set values changed since the Slurm jobs were "
+                                                          "written (" + identity_file.string() +
+                                                          "): write and submit them again"};
+    }
   }
 
   std::vector<Item> items = shard_of(all, o.shard);
-  // The whole graph is checked once, on the first item, before anything runs.
-  if (!items.empty()) load_graph(host, b.graph, b.variables(items.front()));
-  b.graph_sha256 = graph::sha256_file(b.graph);
-  std::vector<std::pair<std::string, std::string>> settings(o.sets.begin(), o.sets.end());
-  b.settings_sha256 = graph::settings_sha256(settings);
-
   fs::create_directories(b.dir / "logs", ec);
   if (ec) throw Failure{kExitUsage, "--out " + o.out.string() + ": cannot create it: " + ec.message()};
+  const fs::path manifest = manifest_path(b.dir, o.shard);
+  const ManifestLock lock(manifest, b.host_name);
+
   std::vector<graph::ManifestRecord> records = read_manifests(b.dir);
   const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
   std::map<std::string, const graph::ManifestRecord*> previous;
@@ -618,6 +771,14 @@ int batch(Host& host, const Options& o, const char* argv0) {
   for (Item& item : items) {
     const auto it = previous.find(item.input.string());
     if (o.force || it == previous.end() || !still_done(*it->second, item, b)) todo.push_back(&item);
+  }
+  // The outputs of items not run now stay theirs.
+  std::set<std::string> running_now;
+  for (const Item* item : todo) running_now.insert(item->input.string());
+  Claims claims;
+  for (const graph::ManifestRecord& r : latest) {
+    if (!r.ok() || running_now.count(r.input)) continue;
+    for (const graph::ManifestFile& output : r.outputs) claims.emplace(output.path, r.input);
   }
   // Largest inputs first: the items still running when the others are done are then short ones,
   // which keeps every worker busy to the end (longest-processing-time-first scheduling).
@@ -631,12 +792,10 @@ int batch(Host& host, const Options& o, const char* argv0) {
   if (!todo.empty()) std::cerr << " on " << std::min<std::size_t>(jobs, todo.size()) << " worker(s)";
   std::cerr << "; output in " << b.dir.string() << '\n';
 
-  const fs::path manifest = manifest_path(b.dir, o.shard);
-  const int manifest_fd = ::open(manifest.c_str(), O_WRONLY | O_CREAT | O_APPEND | O_CLOEXEC, 0644);
-  if (manifest_fd < 0) throw Failure{kExitUsage, manifest.string() + ": cannot open it: " + std::strerror(errno)};
+  const int manifest_fd = open_for_appending(manifest);
   Outcome outcome;
   try {
-    outcome = run_items(host, b, todo, jobs, manifest_fd);
+    outcome = run_items(host, b, todo, jobs, manifest_fd, claims);
   } catch (...) {
     ::close(manifest_fd);
     throw;
@@ -673,38 +832,54 @@ int merge(const Options& o) {
   const fs::path dir = fs::absolute(o.out).lexically_normal();
   std::error_code ec;
   if (!fs::is_directory(dir, ec)) throw Failure{kExitUsage, "merge: " + o.out.string() + ": no such folder"};
+  const fs::path manifest = dir / "manifest.jsonl";
+  const ManifestLock lock(manifest, this_host());
   const std::vector<graph::ManifestRecord> records = read_manifests(dir);
   std::vector<Item> expected;
-  const fs::path list = dir / "inputs.txt";
-  if (fs::exists(list, ec)) {
+  if (fs::exists(dir / "inputs.txt", ec)) {
     Options listed;
-    listed.input_list = list;
-    expected = items_of(inputs_of(listed));
+    listed.input_list = dir / "inputs.txt";
+    expected = items_of(inputs_of(listed, {}));
+  }
+  std::optional<graph::BatchIdentity> identity;
+  if (fs::exists(dir / "batch.json", ec)) {
+    try {
+      identity = graph::read_batch_identity(dir / "batch.json");
+    } catch (const std::exception& e) {
+      throw Failure{kExitUsage, std::string("merge: ") + e.what()};
+    }
   }
   const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
   if (latest.empty() && expected.empty()) throw Failure{kExitUsage, "merge: " + dir.string() + " holds no manifest"};
-  const fs::path manifest = dir / "manifest.jsonl";
   compact_manifest(manifest, records, expected, true);
 
   std::set<std::string> recorded;
   std::size_t ok = 0;
-  std::vector<const graph::ManifestRecord*> failed;
+  std::vector<const graph::ManifestRecord*> failed, stale;
   for (const graph::ManifestRecord& r : latest) {
     recorded.insert(r.input);
-    if (r.ok()) ++ok;
-    else failed.push_back(&r);
+    if (identity && (r.graph_sha256 != identity->graph_sha256 || r.settings_sha256 != identity->settings_sha256)) {
+      stale.push_back(&r);
+    } else if (r.ok()) {
+      ++ok;
+    } else {
+      failed.push_back(&r);
+    }
   }
   std::vector<std::string> missing;
   for (const Item& item : expected)
     if (!recorded.count(item.input.string())) missing.push_back(item.input.string());
   std::cout << "kinegraph: merge: " << latest.size() << " item(s) in " << manifest.string() << ": " << ok << " ok, "
             << failed.size() << " failed";
+  if (identity) std::cout << ", " << stale.size() << " stale";
   if (!expected.empty()) std::cout << ", " << missing.size() << " of " << expected.size() << " inputs without a record";
   std::cout << '\n';
   for (const graph::ManifestRecord* r : failed)
     std::cerr << "  failed: " << r->input << ": " << r->message << " (log: " << (dir / r->log).string() << ")\n";
+  for (const graph::ManifestRecord* r : stale)
+    std::cerr << "  stale (another graph or settings than " << dir.string() << "/batch.json): " << r->input << '\n';
   for (const std::string& input : missing) std::cerr << "  no record: " << input << '\n';
-  return failed.empty() && missing.empty() ? kExitOk : kExitNodeFailed;
+  return failed.empty() && missing.empty() && stale.empty() ? kExitOk : kExitNodeFailed;
 }
 
 }  // namespace kg::app

@@ -106,7 +106,7 @@ options:
   --json            nodes: print JSON instead of text
   --inputs PATTERN...  batch: input files, as paths or patterns: * ? [..] within a folder name,
                     ** for any depth of folders (quote them so the shell leaves them alone);
-                    every argument up to the next option is a pattern
+                    every argument up to the next option (a '-' word) is a pattern
   --input-list FILE batch: input files listed in FILE, one per line (with or without --inputs)
   --out DIR         batch: the folder of item outputs, logs and the manifest
   --force           batch: redo items already done
@@ -195,7 +195,8 @@ Options parse_options(int argc, const char* const* argv) {
       if (has_value) {
         o.inputs.push_back(value);
       } else {
-        for (; i + 1 < argc && std::string(argv[i + 1]).rfind("--", 0) != 0; ++i) o.inputs.emplace_back(argv[i + 1]);
+        // Up to the next option: anything starting with '-' but a lone "-".
+        for (; i + 1 < argc && (argv[i + 1][0] != '-' || argv[i + 1][1] == 0); ++i) o.inputs.emplace_back(argv[i + 1]);
       }
       if (o.inputs.empty()) throw UsageError("--inputs needs at least one file or pattern");
       given.push_back({name, {Verb::Batch}});

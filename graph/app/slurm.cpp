@@ -25,6 +25,24 @@ std::string quoted(const std::string& word) {
   return q + "'";
 }
 
+// A value of an #SBATCH line, which sbatch reads like a shell word in double quotes. In a file
+// name % starts a pattern (%A the array job, %a the task), so `folder`'s own are doubled and
+// `pattern` follows it.
+std::string directive(const std::string& value, const fs::path& folder = {}, const std::string& pattern = "") {
+  const std::string literal = folder.empty() ? value : folder.string();
+  if (literal.find_first_of("\"\\\n") != std::string::npos) {
+    throw Failure{kExitUsage, "--slurm: '" + literal + "' has a quote, backslash or line break, which an #SBATCH "
+                                                      "line cannot hold: use another --out or graph name"};
+  }
+  if (folder.empty()) return "\"" + value + "\"";
+  std::string q = "\"";
+  for (char c : literal) {
+    if (c == '%') q += '%';
+    q += c;
+  }
+  return q + "/" + pattern + "\"";
+}
+
 void write_script(const fs::path& file, const std::string& text) {
   graph::write_file_atomically(file, [&](std::ostream& os) { os << text; });
   fs::permissions(file, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
@@ -78,11 +96,12 @@ int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& di
         << shards << " shards, one array task each.\n"
         << "# Submit: jid=$(sbatch --parsable " << quoted(script.string()) << ") && sbatch --dependency=afterany:$jid "
         << quoted(merge.string()) << "\n"
-        << "#SBATCH --job-name=" << name << "\n"
+        << "#SBATCH --job-name=" << directive(name) << "\n"
         << "#SBATCH --array=0-" << shards - 1 << "\n"
         << "#SBATCH --cpus-per-task=" << jobs << "\n"
-        << "#SBATCH --output=" << (logs / "%A_%a.out").string() << "\n"
+        << "#SBATCH --output=" << directive("", logs, "%A_%a.out") << "\n"
         << head.str() << "set -euo pipefail\n"
+        << "cd " << quoted(fs::current_path().string()) << "  # where the batch was written: relative paths hold\n"
         << "exec " << quoted(executable.string()) << " batch " << quoted(graph.string()) << " --input-list "
         << quoted(list.string()) << " --out " << quoted(dir.string()) << " --shard \"${SLURM_ARRAY_TASK_ID}/" << shards
         << "\" --jobs \"${SLURM_CPUS_PER_TASK:-" << jobs << "}\"";
@@ -96,8 +115,8 @@ int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& di
   merger << "#!/bin/bash\n"
          << "# Written by `kinegraph batch --slurm`: merges the shard manifests of " << dir.string()
          << " once the array job has ended.\n"
-         << "#SBATCH --job-name=" << name << "-merge\n"
-         << "#SBATCH --output=" << (logs / "merge_%j.out").string() << "\n"
+         << "#SBATCH --job-name=" << directive(name + "-merge") << "\n"
+         << "#SBATCH --output=" << directive("", logs, "merge_%j.out") << "\n"
          << head.str() << "set -euo pipefail\n"
          << "exec " << quoted(executable.string()) << " merge " << quoted(dir.string()) << '\n';
   write_script(merge, merger.str());

@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
 #include <atomic>
 #include <cerrno>
@@ -55,11 +56,14 @@ struct PendingSlot {
   char path[4096];
 };
 std::array<PendingSlot, 64> pending_slots;
+// The same for targets written, once renamed into place.
+std::array<PendingSlot, 256> written_slots;
 
-PendingSlot* track_pending(const fs::path& temp) {
-  const std::string& text = temp.native();
+template <std::size_t N>
+PendingSlot* track(std::array<PendingSlot, N>& slots, const fs::path& file) {
+  const std::string& text = file.native();
   if (text.size() >= sizeof(PendingSlot::path)) return nullptr;
-  for (PendingSlot& slot : pending_slots) {
+  for (PendingSlot& slot : slots) {
     int expected = 0;
     if (!slot.state.compare_exchange_strong(expected, 1)) continue;
     std::memcpy(slot.path, text.c_str(), text.size() + 1);
@@ -127,7 +131,7 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
   if (fs::is_directory(target, ec)) throw std::runtime_error(what + ": it is a directory");
 
   const fs::path temp = temporary_beside(target);
-  PendingSlot* const pending = track_pending(temp);
+  PendingSlot* const pending = track(pending_slots, temp);
   struct Untrack {
     PendingSlot* slot;
     ~Untrack() {
@@ -166,7 +170,21 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
   }
   WrittenFiles& files = written();
   const std::lock_guard<std::mutex> lock(files.mutex);
+  const bool again = std::find(files.paths.begin(), files.paths.end(), target) != files.paths.end();
+  if (!again) track(written_slots, fs::absolute(target, ec));
   files.paths.push_back(target);
+}
+
+void remove_written_files() noexcept {
+  for (PendingSlot& slot : written_slots) {
+    if (slot.state.load() == 2) ::unlink(slot.path);
+  }
+}
+
+std::vector<fs::path> input_files_read() {
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  return {files.paths.begin(), files.paths.end()};
 }
 
 void remove_pending_temporaries() noexcept {

@@ -65,8 +65,9 @@ std::vector<fs::path> expand_file_patterns(const std::vector<std::string>& patte
     }
     std::set<fs::path> found;
     walk(base, components, 0, found);
+    std::error_code ec;
+    if (found.empty() && wild && fs::is_regular_file(absolute, ec)) found.insert(absolute);  // take[1].bvh
     if (found.empty()) {
-      std::error_code ec;
       if (!wild && fs::is_directory(absolute, ec))
         throw std::invalid_argument("input '" + pattern + "' is a folder (give a pattern such as '" + pattern +
                                     "/*.bvh')");

@@ -10,6 +10,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "kg/graph/atomic_file.hpp"
 #include "kg/graph/json.hpp"
 #include "kg/graph/sha256.hpp"
 
@@ -46,6 +47,34 @@ Figure figure_of(const YAML::Node& value) {
   return value.as<double>();
 }
 
+std::vector<ManifestFile> files_field(const YAML::Node& object, const char* key) {
+  std::vector<ManifestFile> files;
+  const YAML::Node list = object[key];
+  if (!list) return files;
+  if (!list.IsSequence()) throw std::runtime_error(std::string("\"") + key + "\" is not a list");
+  for (const YAML::Node& f : list) {
+    ManifestFile file;
+    file.path = text_field(f, "path");
+    file.sha256 = text_field(f, "sha256");
+    file.bytes = f["bytes"] ? f["bytes"].as<std::uintmax_t>() : 0;
+    files.push_back(std::move(file));
+  }
+  return files;
+}
+
+void write_files(JsonWriter& w, const char* key, const std::vector<ManifestFile>& files) {
+  w.key(key);
+  w.begin_array();
+  for (const ManifestFile& f : files) {
+    w.begin_object();
+    w.field("path", f.path);
+    w.field("sha256", f.sha256);
+    w.field("bytes", static_cast<std::int64_t>(f.bytes));
+    w.end_object();
+  }
+  w.end_array();
+}
+
 ManifestRecord record_of(const YAML::Node& object) {
   if (!object.IsMap()) throw std::runtime_error("not a JSON object");
   ManifestRecord r;
@@ -59,15 +88,8 @@ ManifestRecord record_of(const YAML::Node& object) {
   r.wall_seconds = number_field(object, "wall_seconds");
   r.graph_seconds = number_field(object, "graph_seconds");
   r.log = text_field(object, "log", false);
-  if (const YAML::Node outputs = object["outputs"]) {
-    for (const YAML::Node& o : outputs) {
-      ManifestOutput out;
-      out.path = text_field(o, "path");
-      out.sha256 = text_field(o, "sha256");
-      out.bytes = o["bytes"] ? o["bytes"].as<std::uintmax_t>() : 0;
-      r.outputs.push_back(std::move(out));
-    }
-  }
+  r.outputs = files_field(object, "outputs");
+  r.reads = files_field(object, "reads");
   if (const YAML::Node figures = object["figures"]) {
     if (!figures.IsMap()) throw std::runtime_error("\"figures\" is not an object");
     for (const auto& kv : figures) r.figures.emplace_back(kv.first.Scalar(), figure_of(kv.second));
@@ -95,16 +117,8 @@ std::string manifest_line(const ManifestRecord& r) {
   w.field("wall_seconds", r.wall_seconds);
   w.field("graph_seconds", r.graph_seconds);
   w.field("log", r.log);
-  w.key("outputs");
-  w.begin_array();
-  for (const ManifestOutput& o : r.outputs) {
-    w.begin_object();
-    w.field("path", o.path);
-    w.field("sha256", o.sha256);
-    w.field("bytes", static_cast<std::int64_t>(o.bytes));
-    w.end_object();
-  }
-  w.end_array();
+  write_files(w, "outputs", r.outputs);
+  write_files(w, "reads", r.reads);
   w.key("figures");
   w.begin_object();
   for (const auto& [key, figure] : r.figures) w.field(key, figure);
@@ -174,6 +188,27 @@ std::string settings_sha256(const std::vector<std::pair<std::string, std::string
     s.update("\n", 1);
   }
   return s.hex();
+}
+
+void write_batch_identity(const fs::path& file, const BatchIdentity& identity) {
+  write_file_atomically(file, [&](std::ostream& os) {
+    JsonWriter w(os);
+    w.begin_object();
+    w.field("graph", identity.graph);
+    w.field("graph_sha256", identity.graph_sha256);
+    w.field("settings_sha256", identity.settings_sha256);
+    w.end_object();
+    os << '\n';
+  });
+}
+
+BatchIdentity read_batch_identity(const fs::path& file) {
+  try {
+    const YAML::Node object = YAML::LoadFile(file.string());
+    return {text_field(object, "graph"), text_field(object, "graph_sha256"), text_field(object, "settings_sha256")};
+  } catch (const std::exception& e) {
+    throw std::runtime_error(file.string() + ": not a batch description: " + e.what());
+  }
 }
 
 std::string utc_timestamp() {

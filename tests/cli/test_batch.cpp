@@ -46,14 +46,36 @@ const char* kDoubleGraph =
     "  stem: {default: \"doubled\"}\n"
     "  out: {default: \"out\"}\n"
     "  write_seconds: {default: \"0\"}\n"
+    "  output: {default: \"${out}/${stem}.txt\"}\n"
+    "  extra: {default: \"\", doc: \"a second number file added to the input's (read by the graph)\"}\n"
     "nodes:\n"
     "  read: {type: test.read_number, params: {path: \"${input}\"}}\n"
     "  double: {type: test.add}\n"
-    "  print: {type: test.print, params: {path: \"${out}/${stem}.txt\", write_seconds: \"${write_seconds}\"}}\n"
+    "  early: {type: test.print, params: {path: \"${out}/${stem}.early.txt\"}}\n"
+    "  print: {type: test.print, params: {path: \"${output}\", write_seconds: \"${write_seconds}\"}}\n"
     "connections:\n"
     "  - {from: read.value, to: double.a}\n"
     "  - {from: read.value, to: double.b}\n"
+    "  - {from: double.sum, to: early.value}\n"
     "  - {from: double.sum, to: print.value}\n";
+
+// The same with ${extra}'s number added: a graph reading a second file.
+const char* kExtraGraph =
+    "version: 1\n"
+    "variables:\n"
+    "  input: {required: true}\n"
+    "  stem: {default: \"x\"}\n"
+    "  out: {default: \"out\"}\n"
+    "  extra: {required: true}\n"
+    "nodes:\n"
+    "  read: {type: test.read_number, params: {path: \"${input}\"}}\n"
+    "  extra: {type: test.read_number, params: {path: \"${extra}\"}}\n"
+    "  add: {type: test.add}\n"
+    "  print: {type: test.print, params: {path: \"${out}/${stem}.txt\"}}\n"
+    "connections:\n"
+    "  - {from: read.value, to: add.a}\n"
+    "  - {from: extra.value, to: add.b}\n"
+    "  - {from: add.sum, to: print.value}\n";
 
 struct Setup {
   TempDir dir;
@@ -67,6 +89,46 @@ struct Setup {
                                  out.string(), "--plugin-dir", kTestPlugins};
     all.insert(all.end(), args.begin(), args.end());
     return kinegraph(all);
+  }
+};
+
+// kinegraph ARGS running in the background, in a process group of its own as a shell runs a job
+// (so the terminal's SIGINT reaches the whole group), stderr to a file.
+struct Background {
+  pid_t pid = 0;
+  fs::path err;
+
+  Background(const std::vector<std::string>& args, fs::path err_file) : err(std::move(err_file)) {
+    std::vector<std::string> text{(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph").string()};
+    text.insert(text.end(), args.begin(), args.end());
+    std::vector<char*> argv;
+    for (std::string& a : text) argv.push_back(a.data());
+    argv.push_back(nullptr);
+    posix_spawnattr_t attributes;
+    posix_spawnattr_init(&attributes);
+    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
+    posix_spawnattr_setpgroup(&attributes, 0);
+    posix_spawn_file_actions_t actions;
+    posix_spawn_file_actions_init(&actions);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
+    const int spawned = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
+    posix_spawn_file_actions_destroy(&actions);
+    posix_spawnattr_destroy(&attributes);
+    if (spawned != 0) pid = 0;
+  }
+  // The exit code, or 128 + the signal.
+  int wait() {
+    int status = 0;
+    ::waitpid(pid, &status, 0);
+    pid = 0;
+    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  }
+  ~Background() {
+    if (pid > 0) {
+      ::kill(-pid, SIGKILL);
+      wait();
+    }
   }
 };
 
@@ -105,9 +167,12 @@ TEST_CASE("batch runs the graph once per input, in parallel, with a log and a ma
     const YAML::Node& rec = records.at(stem);
     CHECK(rec["status"].as<std::string>() == "ok");
     CHECK(rec["input"].as<std::string>() == (s.dir / "in" / (stem + ".txt")).string());
-    CHECK(rec["outputs"].size() == 1);
-    CHECK(rec["outputs"][0]["path"].as<std::string>() == stem + "/" + stem + ".txt");
-    CHECK(rec["outputs"][0]["sha256"].as<std::string>() == kg::graph::sha256_file(output));
+    REQUIRE(rec["outputs"].size() == 2);
+    CHECK(rec["outputs"][0]["path"].as<std::string>() == stem + "/" + stem + ".early.txt");
+    CHECK(rec["outputs"][1]["path"].as<std::string>() == stem + "/" + stem + ".txt");
+    CHECK(rec["outputs"][1]["sha256"].as<std::string>() == kg::graph::sha256_file(output));
+    REQUIRE(rec["reads"].size() == 1);
+    CHECK(rec["reads"][0]["path"].as<std::string>() == rec["input"].as<std::string>());
     CHECK(rec["figures"]["double.sum"].as<double>() == 2 * i);
     CHECK(rec["input_sha256"].as<std::string>() == kg::graph::sha256_file(s.dir / "in" / (stem + ".txt")));
     CHECK(rec["wall_seconds"].as<double>() >= rec["graph_seconds"].as<double>());
@@ -182,6 +247,152 @@ TEST_CASE("batch resumes: done items are skipped until their input, graph, setti
   CHECK(line_count(s.out / "manifest.jsonl") == 3);  // compacted: one line per item
 }
 
+TEST_CASE("resume also checks every other file the graph read, and outputs by content", "[batch]") {
+  Setup s;
+  s.input("a.txt", "1");
+  s.input("b.txt", "2");
+  const fs::path graph = s.dir.write("extra.yaml", kExtraGraph);
+  const fs::path extra = s.dir.write("extra.txt", "100");
+  auto run = [&] {
+    return kinegraph({"batch", graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
+                      s.out.string(), "--plugin-dir", kTestPlugins, "--set", "extra=" + extra.string()});
+  };
+  REQUIRE(run().code == 0);
+  CHECK(read_file(s.out / "a" / "a.txt") == "101\n");
+  const auto records = manifest_by_item(s.out / "manifest.jsonl");
+  const YAML::Node reads = records.at("a")["reads"];  // the input and extra.txt, sorted
+  REQUIRE(reads.size() == 2);
+  CHECK(reads[0]["path"].as<std::string>() == extra.string());
+  CHECK(reads[1]["path"].as<std::string>() == (s.dir / "in" / "a.txt").string());
+
+  s.dir.write("extra.txt", "200");  // same --set, other content
+  Result r = run();
+  CHECK_THAT(r.out, Contains("2 ran (2 ok, 0 failed), 0 already done"));
+  CHECK(read_file(s.out / "b" / "b.txt") == "202\n");
+
+  s.dir.write("batch/a/a.txt", "999\n");  // an output edited: same size, other content
+  r = run();
+  CHECK_THAT(r.out, Contains("1 ran (1 ok, 0 failed), 1 already done"));
+  CHECK(read_file(s.out / "a" / "a.txt") == "201\n");
+}
+
+TEST_CASE("items writing the same output fail instead of overwriting each other silently", "[batch]") {
+  Setup s;
+  s.input("a.txt", "1");
+  s.input("b.txt", "2");
+  const fs::path shared = s.dir / "shared.txt";
+  Result r = s.batch({"--jobs", "1", "--set", "output=" + shared.string()});
+  INFO(show(r));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Contains("also writes: the items overwrite each other's outputs"));
+
+  // Two batches of inputs with the same names into one --out.
+  Setup t;
+  t.input("s1/a.txt", "1");
+  t.input("s2/a.txt", "2");
+  auto into = [&](const std::string& folder) {
+    return kinegraph({"batch", t.graph.string(), "--inputs", (t.dir / "in" / folder / "*.txt").string(), "--out",
+                      t.out.string(), "--plugin-dir", kTestPlugins});
+  };
+  REQUIRE(into("s1").code == 0);
+  r = into("s2");
+  CHECK(r.code == 1);
+  CHECK_THAT(r.err, Contains((t.dir / "in" / "s1" / "a.txt").string() + " also writes"));
+  r = into("s1");  // its output was overwritten: it runs again
+  CHECK_THAT(r.out, Contains("1 ran"));
+}
+
+TEST_CASE("an edited graph fails the items that have not started; a second batch into the same folder is refused",
+          "[batch]") {
+  Setup s;
+  for (int i = 0; i < 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
+  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out", s.out.string(),
+                    "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
+                   s.dir / "stderr.txt");
+  REQUIRE(batch.pid > 0);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (temporaries(s.dir.path(), false).empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  REQUIRE(temporaries(s.dir.path(), false).size() == 1);
+
+  const Result second = s.batch({});
+  CHECK(second.code == 2);
+  CHECK_THAT(second.err, Contains("another batch (pid " + std::to_string(batch.pid)));
+
+  std::ofstream(s.graph, std::ios::app) << "# edited during the batch\n";
+  const int code = batch.wait();
+  INFO(read_file(batch.err));
+  CHECK(code == 1);
+  const auto records = manifest_by_item(s.out / "manifest.jsonl");
+  REQUIRE(records.size() == 3);
+  int edited = 0;
+  for (const auto& [item, record] : records) {
+    if (record["status"].as<std::string>() == "ok") continue;
+    ++edited;
+    CHECK_THAT(record["message"].as<std::string>(), Contains("changed after the batch started"));
+  }
+  CHECK(edited == 2);
+}
+
+TEST_CASE("a worker killed outright fails its item only and leaves no temporary file", "[batch]") {
+  Setup s;
+  s.input("a.txt", "1");
+  s.input("b.txt", "2");
+  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out", s.out.string(),
+                    "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
+                   s.dir / "stderr.txt");
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (temporaries(s.dir.path(), false).empty() && std::chrono::steady_clock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+  const auto pending = temporaries(s.dir.path(), false);
+  REQUIRE(pending.size() == 1);
+  // ".a.txt.tmp.PID.N": the worker's pid, as the OOM killer or Slurm would kill it.
+  const std::string name = pending.front().filename().string();
+  const std::string pid_text = name.substr(name.find(".tmp.") + 5);
+  ::kill(std::stoi(pid_text.substr(0, pid_text.find('.'))), SIGKILL);
+  CHECK(batch.wait() == 1);
+  CHECK(temporaries(s.dir.path()).empty());
+  const auto records = manifest_by_item(s.out / "manifest.jsonl");
+  REQUIRE(records.size() == 2);
+  int killed = 0;
+  for (const auto& [item, record] : records)
+    if (record["status"].as<std::string>() == "failed") {
+      ++killed;
+      CHECK_THAT(record["message"].as<std::string>(), Contains("died of signal 9"));
+    }
+  CHECK(killed == 1);
+}
+
+TEST_CASE("inputs: a list names files as written, a missing one fails its item; outputs under --out are no inputs",
+          "[batch]") {
+  Setup s;
+  s.input("take[1].txt", "1");
+  s.input("b.txt", "2");
+  const fs::path list = s.dir.write("list.txt", "in/take[1].txt\n# a comment\n\nin/b.txt\nin/gone.txt\n");
+  Result r = kinegraph({"batch", s.graph.string(), "--input-list", list.string(), "--out", s.out.string(),
+                        "--plugin-dir", kTestPlugins});
+  INFO(show(r));
+  CHECK(r.code == 1);
+  CHECK_THAT(r.out, Contains("3 ran (2 ok, 1 failed)"));
+  CHECK_THAT(r.err, Contains("gone.txt"));
+  CHECK(read_file(s.out / "take[1]" / "take[1].txt") == "2\n");
+
+  // A literal name with brackets through --inputs too, and options after --inputs end the list.
+  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "take[1].txt").string(), "-j", "1", "--out",
+                 (s.dir / "other").string(), "--plugin-dir", kTestPlugins});
+  CHECK(r.code == 0);
+
+  // --out inside the inputs' folder: the outputs of one run are not inputs of the next.
+  const fs::path inner = s.dir / "in" / "results";
+  for (int run = 0; run < 2; ++run) {
+    r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "**" / "*.txt").string(), "--out",
+                   inner.string(), "--plugin-dir", kTestPlugins});
+    INFO(show(r));
+    CHECK(r.code == 0);
+  }
+  CHECK_THAT(r.out, Contains("0 ran (0 ok, 0 failed), 2 already done"));
+}
+
 TEST_CASE("shards split the items deterministically and merge recovers the whole manifest", "[batch]") {
   Setup s;
   for (int i = 0; i < 5; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
@@ -224,6 +435,7 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
   CHECK_THAT(array, Contains("#SBATCH --partition=short\n"));
   CHECK_THAT(array, Contains("#SBATCH --time=00:10:00\n"));
   CHECK_THAT(array, Contains("--shard \"${SLURM_ARRAY_TASK_ID}/3\""));
+  CHECK_THAT(array, Contains("\ncd '" + fs::current_path().string() + "'"));
   CHECK_THAT(array, Contains("--set 'write_seconds=0'"));
   const fs::path merge_script = s.dir / "jobs" / "double.merge.sbatch";
   CHECK_THAT(read_file(merge_script), Contains(" merge '" + s.out.string() + "'"));
@@ -239,7 +451,7 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
   const Result merged = kg::test::run_program("/bin/bash", {merge_script.string()});
   INFO(show(merged));
   REQUIRE(merged.code == 0);
-  CHECK_THAT(merged.out, Contains("5 ok, 0 failed, 0 of 5 inputs without a record"));
+  CHECK_THAT(merged.out, Contains("5 ok, 0 failed, 0 stale, 0 of 5 inputs without a record"));
 
   // The same batch on this machine alone: byte-identical outputs.
   const fs::path local = s.dir / "local";
@@ -250,9 +462,23 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
   const auto here = manifest_by_item(local / "manifest.jsonl");
   REQUIRE(cluster.size() == 5);
   for (const auto& [stem, record] : here) {
-    CHECK(cluster.at(stem)["outputs"][0]["sha256"].as<std::string>() ==
-          record["outputs"][0]["sha256"].as<std::string>());
+    for (std::size_t k = 0; k < 2; ++k)
+      CHECK(cluster.at(stem)["outputs"][k]["sha256"].as<std::string>() ==
+            record["outputs"][k]["sha256"].as<std::string>());
     CHECK(read_file(s.out / stem / (stem + ".txt")) == read_file(local / stem / (stem + ".txt")));
+  }
+
+  SECTION("tasks refuse a graph edited after the jobs were written, and merge reports stale records") {
+    std::ofstream(s.graph, std::ios::app) << "# edited after submitting\n";
+    const Result task = kg::test::run_program("/bin/bash", {script.string()}, {"SLURM_ARRAY_TASK_ID=0"});
+    CHECK(task.code == 3);
+    CHECK_THAT(task.err, Contains("changed since the Slurm jobs were written"));
+    // Written again for the edited graph, one task run: the others' records are stale.
+    REQUIRE(s.batch({"--slurm", script.string(), "--shards", "3", "--set", "write_seconds=0"}).code == 0);
+    REQUIRE(kg::test::run_program("/bin/bash", {script.string()}, {"SLURM_ARRAY_TASK_ID=0"}).code == 0);
+    const Result stale = kinegraph({"merge", s.out.string()});
+    CHECK(stale.code == 1);
+    CHECK_THAT(stale.out, Contains("2 ok, 0 failed, 3 stale"));
   }
 
   SECTION("merge reports inputs that no shard recorded") {
@@ -272,39 +498,22 @@ TEST_CASE("Ctrl-C stops the batch at once, leaves no partial output, and the sam
                                       "--out", s.out.string(), "--plugin-dir", kTestPlugins, "--jobs", "2",
                                       "--set", "write_seconds=3"};
 
-  // In a process group of its own, as a shell runs a job: the terminal's SIGINT reaches all of it.
-  std::vector<std::string> argv_text{(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph").string()};
-  argv_text.insert(argv_text.end(), args.begin(), args.end());
-  std::vector<char*> argv;
-  for (std::string& a : argv_text) argv.push_back(a.data());
-  argv.push_back(nullptr);
-  posix_spawnattr_t attributes;
-  posix_spawnattr_init(&attributes);
-  posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-  posix_spawnattr_setpgroup(&attributes, 0);
-  posix_spawn_file_actions_t actions;
-  posix_spawn_file_actions_init(&actions);
-  const std::string err_file = (s.dir / "stderr.txt").string();
-  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_file.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
-  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-  pid_t pid = 0;
-  REQUIRE(posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ) == 0);
-  posix_spawn_file_actions_destroy(&actions);
-  posix_spawnattr_destroy(&attributes);
+  Background batch(args, s.dir / "stderr.txt");
+  REQUIRE(batch.pid > 0);
 
   // Wait until both workers are inside their 3 s writes, then interrupt the whole group.
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (temporaries(s.dir.path(), false).size() < 2 && std::chrono::steady_clock::now() < deadline)
     std::this_thread::sleep_for(std::chrono::milliseconds(20));
   REQUIRE(temporaries(s.dir.path(), false).size() == 2);
-  ::kill(-pid, SIGINT);
-  int status = 0;
-  ::waitpid(pid, &status, 0);
-  INFO(read_file(err_file));
-  REQUIRE(WIFEXITED(status));
-  CHECK(WEXITSTATUS(status) == 130);
-  CHECK_THAT(read_file(err_file), Contains("interrupted"));
+  ::kill(-batch.pid, SIGINT);
+  const int code = batch.wait();
+  INFO(read_file(batch.err));
+  CHECK(code == 130);
+  CHECK_THAT(read_file(batch.err), Contains("interrupted"));
   CHECK(temporaries(s.dir.path()).empty());
+  // Nor the finished outputs of the items stopped: an item writes all its outputs or none.
+  for (int i = 0; i < 4; ++i) CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".early.txt")));
   for (int i = 0; i < 4; ++i) CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".txt")));
   CHECK(manifest_by_item(s.out / "manifest.jsonl").empty());
 
@@ -373,6 +582,11 @@ TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
                  "--plugin-dir", kTestPlugins});
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("differ only in their extension"));
+
+  r = s.batch({"--slurm", (s.dir / "jobs.sbatch").string(), "--set", "bogus=1"});  // checked before writing jobs
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Contains("declares no variable 'bogus'"));
+  CHECK_FALSE(fs::exists(s.dir / "jobs.sbatch"));
 
   r = s.batch({"--shard", "2/2"});
   CHECK(r.code == 2);

@@ -71,7 +71,7 @@ TEST_CASE("batch --slurm --submit on a real Slurm cluster gives the local batch'
   }
   const std::string clips = (kData / "cmu" / "**" / "*.bvh").string();
   const std::string graph = (fs::path(KG_SOURCE_DIR) / "graphs" / "convert.yaml").string();
-  const fs::path out = dir / "cluster_out";
+  const fs::path out = dir / "cluster out%1";  // sbatch reads a space and a % in #SBATCH lines its own way
   const Result submitted =
       kinegraph({"batch", graph, "--inputs", clips, "--out", out.string(), "--slurm",
                  (dir / "jobs" / "convert.sbatch").string(), "--shards", "4", "--submit", "--set", "resample=30",

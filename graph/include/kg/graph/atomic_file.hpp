@@ -37,4 +37,12 @@ void remove_pending_temporaries() noexcept;
 // item in its own process, so these are the item's outputs).
 std::vector<std::filesystem::path> written_files();
 
+// Removes the targets write_file_atomically has completed in this process (the first 256), without
+// locks or allocation, for a signal handler of a process doing one unit of work: interrupted, it
+// leaves none of that work's outputs.
+void remove_written_files() noexcept;
+
+// The files read through read_input_file in this process, by canonical path, sorted.
+std::vector<std::filesystem::path> input_files_read();
+
 }  // namespace kg::graph

@@ -5,7 +5,7 @@
 //
 //   {"input":"/data/16_15.bvh","stem":"16_15","item":"16_15","status":"ok","message":"","wall_seconds":1.2,
 //    "graph_seconds":1.1,"log":"logs/16_15.log","outputs":[{"path":"16_15/16_15.bvh",
-//    "sha256":"...","bytes":81234}],"figures":{"solve.iterations":12},"input_sha256":"...",
+//    "sha256":"...","bytes":81234}],"reads":[{"path":"/data/16_15.bvh","sha256":"...","bytes":9}],"figures":{"solve.iterations":12},"input_sha256":"...",
 //    "graph_sha256":"...","settings_sha256":"...","finished_at":"2026-11-22T07:00:00Z",
 //    "host":"node1","shard":"0/4"}
 #pragma once
@@ -20,7 +20,8 @@
 
 namespace kg::graph {
 
-struct ManifestOutput {
+// A file an item wrote or read.
+struct ManifestFile {
   std::string path;  // relative to the batch folder when inside it, else absolute
   std::string sha256;
   std::uintmax_t bytes = 0;
@@ -35,7 +36,8 @@ struct ManifestRecord {
   double wall_seconds = 0;   // the item's whole time: graph loading, run, hashing outputs
   double graph_seconds = 0;  // the graph's own run
   std::string log;           // relative to the batch folder
-  std::vector<ManifestOutput> outputs;
+  std::vector<ManifestFile> outputs;
+  std::vector<ManifestFile> reads;  // every file the graph read: the input, a skeleton, targets, ...
   std::vector<std::pair<std::string, Figure>> figures;  // "node.key", in the order reported
   std::string input_sha256, graph_sha256, settings_sha256;
   std::string finished_at;  // UTC, ISO 8601 to the second
@@ -61,6 +63,16 @@ std::vector<ManifestRecord> latest_records(const std::vector<ManifestRecord>& re
 
 // The hash identifying a batch's settings: every NAME=VALUE, sorted by name.
 std::string settings_sha256(const std::vector<std::pair<std::string, std::string>>& settings);
+
+// What a batch written as Slurm jobs was (DIR/batch.json), so that its array tasks refuse to run
+// another graph or other settings and merge can tell stale records from current ones.
+struct BatchIdentity {
+  std::string graph;  // absolute path
+  std::string graph_sha256, settings_sha256;
+};
+void write_batch_identity(const std::filesystem::path& file, const BatchIdentity& identity);  // atomically
+// Throws std::runtime_error naming the file when it cannot be read.
+BatchIdentity read_batch_identity(const std::filesystem::path& file);
 
 // The current time as "YYYY-MM-DDTHH:MM:SSZ".
 std::string utc_timestamp();
