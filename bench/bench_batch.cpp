@@ -34,19 +34,22 @@ fs::path kinegraph() {
   return fs::read_symlink("/proc/self/exe").parent_path() / "kinegraph";
 }
 
-std::string quoted(const std::string& word) { return "'" + word + "'"; }
+std::string quoted(const std::string& word) {
+  return "'" + word + "'";
+}
 
 // Wall seconds of one batch; its manifest's records in `records`.
 double run_batch(const fs::path& graph, const fs::path& list, const fs::path& out, int jobs,
                  std::vector<kg::graph::ManifestRecord>& records, const std::string& extra = "") {
-  const std::string command = quoted(kinegraph().string()) + " batch " + quoted(graph.string()) + " --input-list " +
-                              quoted(list.string()) + " --out " + quoted(out.string()) + " --jobs " +
-                              std::to_string(jobs) + " --force " + extra + " > /dev/null 2> " +
+  const std::string command = quoted(kinegraph().string()) + " batch " + quoted(graph.string()) +
+                              " --input-list " + quoted(list.string()) + " --out " + quoted(out.string()) +
+                              " --jobs " + std::to_string(jobs) + " --force " + extra + " > /dev/null 2> " +
                               quoted((out.string() + ".stderr"));
   const auto start = std::chrono::steady_clock::now();
   const int status = std::system(command.c_str());
   const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  if (status != 0) std::cerr << "  (batch exited with status " << status << "; see " << out.string() << ".stderr)\n";
+  if (status != 0)
+    std::cerr << "  (batch exited with status " << status << "; see " << out.string() << ".stderr)\n";
   std::vector<std::string> problems;
   records = kg::graph::read_manifest(out / "manifest.jsonl", problems);
   return wall;
@@ -59,14 +62,20 @@ fs::path write_list(const fs::path& file, const std::vector<fs::path>& inputs) {
 }
 
 void walks(const fs::path& temp) {
-  const std::vector<fs::path> batch = {
-      kData / "cmu/bvh_daz/02_01.bvh", kData / "cmu/bvh_daz/02_03.bvh", kData / "cmu/bvh_daz/07_05.bvh",
-       kData / "cmu/bvh_daz/09_06.bvh", kData / "cmu/bvh_motionbuilder/16_15.bvh",
-       kData / "cmu/bvh_iclone_cc_rig/002_03.bvh", kData / "cmu/bvh_iclone_cc_rig/007_05.bvh",
-       kData / "other_skeletons/games105/walk60.bvh", kData / "other_skeletons/games105/run_forward.bvh",
-       kData / "other_skeletons/bandai_namco/dataset-1_run_normal_001.bvh",
-       kData / "other_skeletons/bandai_namco/dataset-1_dash_normal_001.bvh",
-      kData / "cmu/asf_amc/07_05.amc", kData / "cmu/asf_amc/09_06.amc", kData / "cmu/asf_amc/16_15.amc"};
+  const std::vector<fs::path> batch = {kData / "cmu/bvh_daz/02_01.bvh",
+                                       kData / "cmu/bvh_daz/02_03.bvh",
+                                       kData / "cmu/bvh_daz/07_05.bvh",
+                                       kData / "cmu/bvh_daz/09_06.bvh",
+                                       kData / "cmu/bvh_motionbuilder/16_15.bvh",
+                                       kData / "cmu/bvh_iclone_cc_rig/002_03.bvh",
+                                       kData / "cmu/bvh_iclone_cc_rig/007_05.bvh",
+                                       kData / "other_skeletons/games105/walk60.bvh",
+                                       kData / "other_skeletons/games105/run_forward.bvh",
+                                       kData / "other_skeletons/bandai_namco/dataset-1_run_normal_001.bvh",
+                                       kData / "other_skeletons/bandai_namco/dataset-1_dash_normal_001.bvh",
+                                       kData / "cmu/asf_amc/07_05.amc",
+                                       kData / "cmu/asf_amc/09_06.amc",
+                                       kData / "cmu/asf_amc/16_15.amc"};
   for (const fs::path& clip : batch) {
     if (!fs::exists(clip)) {
       std::cout << "walks: skipped: " << clip.string() << " is absent\n";
@@ -92,8 +101,9 @@ void walks(const fs::path& temp) {
     std::sort(walls[jobs].begin(), walls[jobs].end());
     const double wall = walls[jobs][kRuns / 2];
     rate[jobs] = clips / wall;
-    std::printf("  %d worker(s): %zu clips (%zu failed over %d runs), median %.2f s (%.2f to %.2f): %.2f clips/s\n",
-                jobs, clips, failed[jobs], kRuns, wall, walls[jobs].front(), walls[jobs].back(), rate[jobs]);
+    std::printf(
+        "  %d worker(s): %zu clips (%zu failed over %d runs), median %.2f s (%.2f to %.2f): %.2f clips/s\n",
+        jobs, clips, failed[jobs], kRuns, wall, walls[jobs].front(), walls[jobs].back(), rate[jobs]);
   }
   std::printf("  parallel efficiency at 2 workers: %.0f%% (target >= 85%%)\n", 100 * rate[2] / (2 * rate[1]));
 }
@@ -107,10 +117,12 @@ void overhead(const fs::path& temp) {
     char name[32];
     std::snprintf(name, sizeof name, "tiny%04d.bvh", i);
     files.push_back(inputs / name);
-    std::ofstream(files.back()) << "HIERARCHY\nROOT hip\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition "
-                                   "Zposition Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\n"
-                                   "MOTION\nFrames: 2\nFrame Time: 0.0333333\n"
-                                << i << " 90 0 0 0 0\n" << i << " 91 0 0 0 5\n";
+    std::ofstream(files.back())
+        << "HIERARCHY\nROOT hip\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition "
+           "Zposition Zrotation Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 10 0\n  }\n}\n"
+           "MOTION\nFrames: 2\nFrame Time: 0.0333333\n"
+        << i << " 90 0 0 0 0\n"
+        << i << " 91 0 0 0 5\n";
   }
   const fs::path list = write_list(temp / "tiny.txt", files);
   const fs::path graph = kSource / "graphs" / "convert.yaml";
@@ -127,11 +139,12 @@ void overhead(const fs::path& temp) {
       failed += !r.ok();
     }
     const double per_item_ms = 1000 * (wall * jobs - graph_seconds) / kItems;
-    std::printf("  %d worker(s): %zu items (%zu failed) in %.2f s; graphs' own time %.3f ms/item; batch overhead "
-                "%.2f ms/item (worker-seconds less graph time; target <= 5 ms), of which inside the item's process "
-                "%.2f ms\n",
-                jobs, records.size(), failed, wall, 1000 * graph_seconds / kItems, per_item_ms,
-                1000 * (item_seconds - graph_seconds) / kItems);
+    std::printf(
+        "  %d worker(s): %zu items (%zu failed) in %.2f s; graphs' own time %.3f ms/item; batch overhead "
+        "%.2f ms/item (worker-seconds less graph time; target <= 5 ms), of which inside the item's process "
+        "%.2f ms\n",
+        jobs, records.size(), failed, wall, 1000 * graph_seconds / kItems, per_item_ms,
+        1000 * (item_seconds - graph_seconds) / kItems);
   }
 }
 

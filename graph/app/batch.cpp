@@ -3,8 +3,8 @@
 #include <fcntl.h>
 #include <poll.h>
 #include <sched.h>
-#include <sys/file.h>
 #include <signal.h>
+#include <sys/file.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -39,7 +39,9 @@ namespace {
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
-double since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
+double since(Clock::time_point start) {
+  return std::chrono::duration<double>(Clock::now() - start).count();
+}
 
 // ---- the items ------------------------------------------------------------------------------
 
@@ -84,7 +86,8 @@ std::vector<fs::path> inputs_of(const Options& o, const fs::path& dir) {
       inputs.push_back((fs::path(line).is_absolute() ? fs::path(line) : base / line).lexically_normal());
     }
   }
-  if (inputs.empty()) throw Failure{kExitUsage, "no inputs: --input-list " + o.input_list.string() + " lists none"};
+  if (inputs.empty())
+    throw Failure{kExitUsage, "no inputs: --input-list " + o.input_list.string() + " lists none"};
   std::sort(inputs.begin(), inputs.end());
   inputs.erase(std::unique(inputs.begin(), inputs.end()), inputs.end());
   std::vector<fs::path> kept;
@@ -92,12 +95,14 @@ std::vector<fs::path> inputs_of(const Options& o, const fs::path& dir) {
     const fs::path inside = input.lexically_relative(dir);
     if (!dir.empty() && !inside.empty() && *inside.begin() != "..") continue;
     if (!valid_utf8(input.string())) {
-      throw Failure{kExitUsage, "input " + input.string() +
-                                    ": its name is not UTF-8, which the JSON manifest cannot record: rename it"};
+      throw Failure{kExitUsage,
+                    "input " + input.string() +
+                        ": its name is not UTF-8, which the JSON manifest cannot record: rename it"};
     }
     kept.push_back(input);
   }
-  if (kept.empty()) throw Failure{kExitUsage, "no input left: every file given is inside --out " + dir.string()};
+  if (kept.empty())
+    throw Failure{kExitUsage, "no input left: every file given is inside --out " + dir.string()};
   return kept;
 }
 
@@ -126,8 +131,9 @@ std::vector<Item> items_of(const std::vector<fs::path>& inputs) {
     const fs::path name = input.parent_path().lexically_relative(common) / stem;
     const auto [it, fresh] = by_name.emplace(name.lexically_normal(), input);
     if (!fresh) {
-      throw Failure{kExitUsage, "inputs " + it->second.string() + " and " + input.string() + " differ only in " +
-                                    "their extension, so their outputs and logs would collide: batch them separately"};
+      throw Failure{kExitUsage,
+                    "inputs " + it->second.string() + " and " + input.string() + " differ only in " +
+                        "their extension, so their outputs and logs would collide: batch them separately"};
     }
     items.push_back({input, stem, name.lexically_normal(), {}});
   }
@@ -148,7 +154,8 @@ std::string shard_text(const std::optional<Shard>& shard) {
 
 fs::path manifest_path(const fs::path& dir, const std::optional<Shard>& shard) {
   if (!shard) return dir / "manifest.jsonl";
-  return dir / ("manifest.shard-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) + ".jsonl");
+  return dir / ("manifest.shard-" + std::to_string(shard->index) + "-of-" + std::to_string(shard->count) +
+                ".jsonl");
 }
 
 // Every record in DIR's manifests (the batch's own and its shards'), in file name order.
@@ -287,8 +294,9 @@ bool write_all(int fd, const std::string& text) {
     const std::map<std::string, std::string> sets = b.variables(item);
     std::cerr << "kinegraph batch: " << b.graph.string() << " on " << r.input << '\n';
     if (graph::sha256_file(b.graph) != b.graph_sha256) {
-      throw Failure{kExitGraphInvalid, b.graph.string() + " changed after the batch started (edited?), so this item "
-                                                          "would run another graph: run the batch again"};
+      throw Failure{kExitGraphInvalid, b.graph.string() +
+                                           " changed after the batch started (edited?), so this item "
+                                           "would run another graph: run the batch again"};
     }
     for (const auto& [name, value] : sets) std::cerr << "  " << name << " = " << value << '\n';
     const graph::Graph g = load_graph(host, b.graph, sets);
@@ -360,8 +368,10 @@ extern "C" void batch_interrupted(int sig) {
 std::string clock_text(double s) {
   const long total = std::lround(std::max(0.0, s));
   std::ostringstream os;
-  if (total >= 3600) os << total / 3600 << ':' << std::setw(2) << std::setfill('0') << (total / 60) % 60;
-  else os << total / 60;
+  if (total >= 3600)
+    os << total / 3600 << ':' << std::setw(2) << std::setfill('0') << (total / 60) % 60;
+  else
+    os << total / 60;
   os << ':' << std::setw(2) << std::setfill('0') << total % 60;
   return os.str();
 }
@@ -375,13 +385,15 @@ class Progress {
     ++done_;
     failed_ += !r.ok();
     if (!terminal_) {
-      std::cerr << "[" << done_ << "/" << total_ << "] " << (r.ok() ? "ok" : "FAILED") << ' ' << r.item << " ("
-                << seconds(r.wall_seconds) << ")" << (r.ok() ? "" : ": " + r.message + " (log: " + (dir / r.log).string() + ")")
-                << " · " << failed_ << " failed · " << rate_text() << '\n';
+      std::cerr << "[" << done_ << "/" << total_ << "] " << (r.ok() ? "ok" : "FAILED") << ' ' << r.item
+                << " (" << seconds(r.wall_seconds) << ")"
+                << (r.ok() ? "" : ": " + r.message + " (log: " + (dir / r.log).string() + ")") << " · "
+                << failed_ << " failed · " << rate_text() << '\n';
       return;
     }
     if (!r.ok()) {
-      std::cerr << "\r\x1b[K" << "FAILED " << r.item << ": " << r.message << " (log: " << (dir / r.log).string() << ")\n";
+      std::cerr << "\r\x1b[K"
+                << "FAILED " << r.item << ": " << r.message << " (log: " << (dir / r.log).string() << ")\n";
     }
     draw();
   }
@@ -407,8 +419,8 @@ class Progress {
   void draw() {
     constexpr int kWidth = 30;
     const int filled = total_ ? static_cast<int>(kWidth * done_ / total_) : kWidth;
-    std::cerr << "\r\x1b[K[" << std::string(filled, '#') << std::string(kWidth - filled, '.') << "] " << done_ << '/'
-              << total_ << " · " << failed_ << " failed · " << rate_text() << std::flush;
+    std::cerr << "\r\x1b[K[" << std::string(filled, '#') << std::string(kWidth - filled, '.') << "] " << done_
+              << '/' << total_ << " · " << failed_ << " failed · " << rate_text() << std::flush;
     drawn_ = true;
     last_draw_ = Clock::now();
   }
@@ -467,7 +479,8 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
   struct sigaction previous[std::size(kStopSignals)];
   action.sa_handler = batch_interrupted;
   ::sigemptyset(&action.sa_mask);
-  for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &action, &previous[i]);
+  for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
+    ::sigaction(kStopSignals[i], &action, &previous[i]);
   // Blocked around fork, so that a new item never runs with the batch's handlers.
   sigset_t stop_signals, unblocked;
   ::sigemptyset(&stop_signals);
@@ -495,7 +508,8 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
     // Stopped from outside (Ctrl-C reaches the whole process group, Slurm's scancel every
     // process of the job): not the item's fault, so no record, and the next run does it again.
     if (!have && WIFSIGNALED(status) &&
-        std::find(std::begin(kStopSignals), std::end(kStopSignals), WTERMSIG(status)) != std::end(kStopSignals)) {
+        std::find(std::begin(kStopSignals), std::end(kStopSignals), WTERMSIG(status)) !=
+            std::end(kStopSignals)) {
       fs::remove(partial, ec);
       ++outcome.interrupted;
       return;
@@ -507,8 +521,8 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
       record.status = "failed";
       if (record.message.empty()) {
         record.message = WIFSIGNALED(status) ? "its process died of " + signal_name(WTERMSIG(status))
-                                             : "its process exited with code " + std::to_string(WEXITSTATUS(status)) +
-                                                   " before reporting";
+                                             : "its process exited with code " +
+                                                   std::to_string(WEXITSTATUS(status)) + " before reporting";
       }
       record.log = relative_to(b.log(*r.item), b.dir);
       record.graph_sha256 = b.graph_sha256;
@@ -522,8 +536,9 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
       const auto [claim, fresh] = claims.emplace(output.path, record.input);
       if (fresh || claim->second == record.input) continue;
       record.status = "failed";
-      record.message += std::string(record.message.empty() ? "" : "; ") + "it wrote " + output.path + ", which " +
-                        claim->second + " also writes: the items overwrite each other's outputs (give each its " +
+      record.message += std::string(record.message.empty() ? "" : "; ") + "it wrote " + output.path +
+                        ", which " + claim->second +
+                        " also writes: the items overwrite each other's outputs (give each its " +
                         "own ${out}, or this batch another --out)";
     }
     if (manifest_fd >= 0 && !write_all(manifest_fd, graph::manifest_line(record) + "\n"))
@@ -540,7 +555,8 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
     for (const Running& r : running) ::kill(r.pid, SIGTERM);
   };
   auto restore = [&] {
-    for (std::size_t i = 0; i < std::size(kStopSignals); ++i) ::sigaction(kStopSignals[i], &previous[i], nullptr);
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
+      ::sigaction(kStopSignals[i], &previous[i], nullptr);
     ::close(g_signal_pipe[0]);
     ::close(g_signal_pipe[1]);
   };
@@ -584,7 +600,8 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
       polled.push_back({g_signal_pipe[0], POLLIN, 0});
       for (const Running& r : running) polled.push_back({r.fd, POLLIN, 0});
       const int ready = ::poll(polled.data(), polled.size(), 200);
-      if (ready < 0 && errno != EINTR) throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
+      if (ready < 0 && errno != EINTR)
+        throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
       if (ready > 0 && (polled[0].revents & POLLIN)) {
         unsigned char sig[16];
         while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
@@ -660,8 +677,8 @@ class ManifestLock {
       char holder[256] = {};
       [[maybe_unused]] const ssize_t n = ::pread(fd_, holder, sizeof holder - 1, 0);
       ::close(fd_);
-      throw Failure{kExitUsage, "another batch (" + std::string(holder) + ") is writing " + manifest.string() +
-                                    ": wait for it, or give this one another --out"};
+      throw Failure{kExitUsage, "another batch (" + std::string(holder) + ") is writing " +
+                                    manifest.string() + ": wait for it, or give this one another --out"};
     }
     const std::string me = "pid " + std::to_string(::getpid()) + " on " + host;
     if (::ftruncate(fd_, 0) == 0) write_all(fd_, me);
@@ -702,7 +719,8 @@ int batch(Host& host, const Options& o, const char* argv0) {
   b.host_name = this_host();
 
   std::error_code ec;
-  if (!fs::is_regular_file(b.graph, ec)) throw Failure{kExitGraphInvalid, o.graph.string() + ": no such graph file"};
+  if (!fs::is_regular_file(b.graph, ec))
+    throw Failure{kExitGraphInvalid, o.graph.string() + ": no such graph file"};
   std::vector<graph::Variable> declared;
   try {
     declared = graph::read_graph_variables(b.graph);
@@ -710,12 +728,14 @@ int batch(Host& host, const Options& o, const char* argv0) {
     throw Failure{kExitGraphInvalid, e.what()};
   }
   auto declares = [&](const std::string& name) {
-    return std::any_of(declared.begin(), declared.end(), [&](const graph::Variable& v) { return v.name == name; });
+    return std::any_of(declared.begin(), declared.end(),
+                       [&](const graph::Variable& v) { return v.name == name; });
   };
   if (!declares("input")) {
-    throw Failure{kExitGraphInvalid, o.graph.string() +
-                                         ": declares no variable 'input', so it cannot run once per input file "
-                                         "(batch gives each item the variables input, stem and out)"};
+    throw Failure{kExitGraphInvalid,
+                  o.graph.string() +
+                      ": declares no variable 'input', so it cannot run once per input file "
+                      "(batch gives each item the variables input, stem and out)"};
   }
   b.declares_stem = declares("stem");
   b.declares_out = declares("out");
@@ -723,8 +743,9 @@ int batch(Host& host, const Options& o, const char* argv0) {
   const std::vector<Item> all = items_of(inputs_of(o, b.dir));
   if (!b.declares_out && all.size() > 1) {
     throw Failure{kExitGraphInvalid,
-                  o.graph.string() + ": declares no variable 'out', so every item would write the same outputs; "
-                                     "declare it and default the outputs from it (output: ${out}/${stem}.bvh)"};
+                  o.graph.string() +
+                      ": declares no variable 'out', so every item would write the same outputs; "
+                      "declare it and default the outputs from it (output: ${out}/${stem}.bvh)"};
   }
   // The whole graph is checked once, on the first item, before anything runs or is submitted.
   load_graph(host, b.graph, b.variables(all.front()));
@@ -741,7 +762,8 @@ int batch(Host& host, const Options& o, const char* argv0) {
     return write_slurm_jobs(o, b.graph, b.dir, inputs, executable_path(argv0));
   }
   // An array task of jobs written by --slurm runs the batch they were written for, or nothing.
-  if (o.shard && !o.input_list.empty() && fs::absolute(o.input_list).lexically_normal() == b.dir / "inputs.txt" &&
+  if (o.shard && !o.input_list.empty() &&
+      fs::absolute(o.input_list).lexically_normal() == b.dir / "inputs.txt" &&
       fs::exists(identity_file, ec)) {
     graph::BatchIdentity expected;
     try {
@@ -750,9 +772,10 @@ int batch(Host& host, const Options& o, const char* argv0) {
       throw Failure{kExitUsage, e.what()};
     }
     if (expected.graph_sha256 != b.graph_sha256 || expected.settings_sha256 != b.settings_sha256) {
-      throw Failure{kExitGraphInvalid, o.graph.string() + " or the --set values changed since the Slurm jobs were "
-                                                          "written (" + identity_file.string() +
-                                                          "): write and submit them again"};
+      throw Failure{kExitGraphInvalid, o.graph.string() +
+                                           " or the --set values changed since the Slurm jobs were "
+                                           "written (" +
+                                           identity_file.string() + "): write and submit them again"};
     }
   }
 
@@ -784,11 +807,12 @@ int batch(Host& host, const Options& o, const char* argv0) {
   // which keeps every worker busy to the end (longest-processing-time-first scheduling).
   std::map<const Item*, std::uintmax_t> sizes;
   for (const Item* item : todo) sizes[item] = fs::file_size(item->input, ec);
-  std::stable_sort(todo.begin(), todo.end(), [&](const Item* a, const Item* b) { return sizes[a] > sizes[b]; });
+  std::stable_sort(todo.begin(), todo.end(),
+                   [&](const Item* a, const Item* b) { return sizes[a] > sizes[b]; });
   const int jobs = o.jobs_given ? o.jobs : cores_available();
   const std::size_t skipped = items.size() - todo.size();
-  std::cerr << "kinegraph: batch: " << items.size() << " item(s)" << (o.shard ? " in shard " + b.shard : "") << ", "
-            << skipped << " already done, " << todo.size() << " to run";
+  std::cerr << "kinegraph: batch: " << items.size() << " item(s)" << (o.shard ? " in shard " + b.shard : "")
+            << ", " << skipped << " already done, " << todo.size() << " to run";
   if (!todo.empty()) std::cerr << " on " << std::min<std::size_t>(jobs, todo.size()) << " worker(s)";
   std::cerr << "; output in " << b.dir.string() << '\n';
 
@@ -807,14 +831,16 @@ int batch(Host& host, const Options& o, const char* argv0) {
   std::size_t failed = 0;
   for (const graph::ManifestRecord& r : outcome.records) failed += !r.ok();
   const double wall = since(start);
-  std::cout << "kinegraph: batch: " << outcome.records.size() << " ran (" << outcome.records.size() - failed << " ok, "
-            << failed << " failed), " << skipped << " already done";
-  if (outcome.records.size() < todo.size()) std::cout << ", " << todo.size() - outcome.records.size() << " not run";
+  std::cout << "kinegraph: batch: " << outcome.records.size() << " ran (" << outcome.records.size() - failed
+            << " ok, " << failed << " failed), " << skipped << " already done";
+  if (outcome.records.size() < todo.size())
+    std::cout << ", " << todo.size() - outcome.records.size() << " not run";
   std::cout << " in " << seconds(wall) << "; manifest " << manifest.string() << '\n';
   if (failed) {
     std::cerr << "kinegraph: batch: " << failed << " item(s) failed:\n";
     for (const graph::ManifestRecord& r : outcome.records)
-      if (!r.ok()) std::cerr << "  " << r.input << ": " << r.message << " (log: " << (b.dir / r.log).string() << ")\n";
+      if (!r.ok())
+        std::cerr << "  " << r.input << ": " << r.message << " (log: " << (b.dir / r.log).string() << ")\n";
   }
   if (outcome.stopped) {
     std::cerr << "kinegraph: batch: interrupted; the same command continues where this one stopped\n";
@@ -850,7 +876,8 @@ int merge(const Options& o) {
     }
   }
   const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
-  if (latest.empty() && expected.empty()) throw Failure{kExitUsage, "merge: " + dir.string() + " holds no manifest"};
+  if (latest.empty() && expected.empty())
+    throw Failure{kExitUsage, "merge: " + dir.string() + " holds no manifest"};
   compact_manifest(manifest, records, expected, true);
 
   std::set<std::string> recorded;
@@ -858,7 +885,8 @@ int merge(const Options& o) {
   std::vector<const graph::ManifestRecord*> failed, stale;
   for (const graph::ManifestRecord& r : latest) {
     recorded.insert(r.input);
-    if (identity && (r.graph_sha256 != identity->graph_sha256 || r.settings_sha256 != identity->settings_sha256)) {
+    if (identity &&
+        (r.graph_sha256 != identity->graph_sha256 || r.settings_sha256 != identity->settings_sha256)) {
       stale.push_back(&r);
     } else if (r.ok()) {
       ++ok;
@@ -869,15 +897,18 @@ int merge(const Options& o) {
   std::vector<std::string> missing;
   for (const Item& item : expected)
     if (!recorded.count(item.input.string())) missing.push_back(item.input.string());
-  std::cout << "kinegraph: merge: " << latest.size() << " item(s) in " << manifest.string() << ": " << ok << " ok, "
-            << failed.size() << " failed";
+  std::cout << "kinegraph: merge: " << latest.size() << " item(s) in " << manifest.string() << ": " << ok
+            << " ok, " << failed.size() << " failed";
   if (identity) std::cout << ", " << stale.size() << " stale";
-  if (!expected.empty()) std::cout << ", " << missing.size() << " of " << expected.size() << " inputs without a record";
+  if (!expected.empty())
+    std::cout << ", " << missing.size() << " of " << expected.size() << " inputs without a record";
   std::cout << '\n';
   for (const graph::ManifestRecord* r : failed)
-    std::cerr << "  failed: " << r->input << ": " << r->message << " (log: " << (dir / r->log).string() << ")\n";
+    std::cerr << "  failed: " << r->input << ": " << r->message << " (log: " << (dir / r->log).string()
+              << ")\n";
   for (const graph::ManifestRecord* r : stale)
-    std::cerr << "  stale (another graph or settings than " << dir.string() << "/batch.json): " << r->input << '\n';
+    std::cerr << "  stale (another graph or settings than " << dir.string() << "/batch.json): " << r->input
+              << '\n';
   for (const std::string& input : missing) std::cerr << "  no record: " << input << '\n';
   return failed.empty() && missing.empty() && stale.empty() ? kExitOk : kExitNodeFailed;
 }

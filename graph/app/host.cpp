@@ -32,8 +32,7 @@ void remove_partial_outputs_on_signal() {
   struct sigaction action {};
   action.sa_handler = interrupted;
   ::sigemptyset(&action.sa_mask);
-  ::sigaction(SIGINT, &action, nullptr);
-  ::sigaction(SIGTERM, &action, nullptr);
+  for (int sig : {SIGINT, SIGTERM, SIGHUP}) ::sigaction(sig, &action, nullptr);
 }
 
 fs::path executable_path(const char* argv0) {
@@ -43,7 +42,9 @@ fs::path executable_path(const char* argv0) {
   return exe;
 }
 
-fs::path install_prefix(const char* argv0) { return executable_path(argv0).parent_path().parent_path(); }
+fs::path install_prefix(const char* argv0) {
+  return executable_path(argv0).parent_path().parent_path();
+}
 
 void load_plugins(Host& host, const Options& o, const fs::path& prefix) {
   const fs::path builtin = prefix / "lib" / "kinegraph" / "kg_builtin_nodes.so";

@@ -27,8 +27,8 @@ struct Failure {
 
 void warn(const std::string& message);
 
-// From now on SIGINT and SIGTERM remove the temporary files of outputs being written, then end
-// the process as the signal would: an interrupted run leaves no partial output.
+// From now on SIGINT, SIGTERM and SIGHUP remove the temporary files of outputs being written,
+// then end the process as the signal would: an interrupted run leaves no partial output.
 void remove_partial_outputs_on_signal();
 
 // The installation prefix: the executable lives in <prefix>/bin.
@@ -46,7 +46,8 @@ struct Host {
 void load_plugins(Host& host, const Options& o, const std::filesystem::path& prefix);
 
 // Loads the plugins `file` names (step 4), then the graph with `sets` as its variables.
-graph::Graph load_graph(Host& host, const std::filesystem::path& file, const std::map<std::string, std::string>& sets);
+graph::Graph load_graph(Host& host, const std::filesystem::path& file,
+                        const std::map<std::string, std::string>& sets);
 
 // "graphs/x.yaml:12:3: node solve (retarget.spacetime) failed: ..." for each node that failed.
 std::vector<std::string> node_failures(const graph::Graph& g, const graph::RunResult& result);

@@ -12,9 +12,8 @@ struct VerbName {
   const char* name;
   Verb verb;
 };
-constexpr VerbName kVerbs[] = {
-    {"run", Verb::Run},     {"validate", Verb::Validate}, {"nodes", Verb::Nodes},
-    {"dot", Verb::Dot},     {"batch", Verb::Batch},       {"merge", Verb::Merge}};
+constexpr VerbName kVerbs[] = {{"run", Verb::Run}, {"validate", Verb::Validate}, {"nodes", Verb::Nodes},
+                               {"dot", Verb::Dot}, {"batch", Verb::Batch},       {"merge", Verb::Merge}};
 
 const char* verb_name(Verb verb) {
   for (const VerbName& v : kVerbs) {
@@ -37,7 +36,8 @@ std::optional<int> whole_number(const std::string& text) {
 int parse_count(const std::string& option, const std::string& text, int most) {
   const std::optional<int> n = whole_number(text);
   if (!n || *n < 1 || *n > most) {
-    throw UsageError(option + " expects a whole number from 1 to " + std::to_string(most) + ", got '" + text + "'");
+    throw UsageError(option + " expects a whole number from 1 to " + std::to_string(most) + ", got '" + text +
+                     "'");
   }
   return *n;
 }
@@ -48,7 +48,8 @@ Shard parse_shard(const std::string& text) {
   const std::optional<int> count =
       slash == std::string::npos ? std::nullopt : whole_number(text.substr(slash + 1));
   if (!index || !count || *count < 1 || *index < 0 || *index >= *count) {
-    throw UsageError("--shard expects I/N with 0 <= I < N (e.g. 0/4 for the first of four), got '" + text + "'");
+    throw UsageError("--shard expects I/N with 0 <= I < N (e.g. 0/4 for the first of four), got '" + text +
+                     "'");
   }
   return {*index, *count};
 }
@@ -196,7 +197,8 @@ Options parse_options(int argc, const char* const* argv) {
         o.inputs.push_back(value);
       } else {
         // Up to the next option: anything starting with '-' but a lone "-".
-        for (; i + 1 < argc && (argv[i + 1][0] != '-' || argv[i + 1][1] == 0); ++i) o.inputs.emplace_back(argv[i + 1]);
+        for (; i + 1 < argc && (argv[i + 1][0] != '-' || argv[i + 1][1] == 0); ++i)
+          o.inputs.emplace_back(argv[i + 1]);
       }
       if (o.inputs.empty()) throw UsageError("--inputs needs at least one file or pattern");
       given.push_back({name, {Verb::Batch}});
@@ -229,7 +231,8 @@ Options parse_options(int argc, const char* const* argv) {
       given.push_back({name, {Verb::Batch}});
     } else if (name == "--sbatch") {
       const std::string option = take_value();
-      if (option.empty()) throw UsageError("--sbatch needs an sbatch option, e.g. --sbatch=--partition=short");
+      if (option.empty())
+        throw UsageError("--sbatch needs an sbatch option, e.g. --sbatch=--partition=short");
       if (option.find('\n') != std::string::npos) throw UsageError("--sbatch option has a line break");
       o.sbatch_options.push_back(option);
       given.push_back({name, {Verb::Batch}});
@@ -298,15 +301,18 @@ Options parse_options(int argc, const char* const* argv) {
     throw UsageError("unexpected argument '" + positionals[1] + "'");
   }
   if (o.verb == Verb::Batch) {
-    if (o.inputs.empty() && o.input_list.empty()) throw UsageError("batch needs --inputs PATTERN... or --input-list FILE");
+    if (o.inputs.empty() && o.input_list.empty())
+      throw UsageError("batch needs --inputs PATTERN... or --input-list FILE");
     if (o.out.empty()) throw UsageError("batch needs --out DIR");
     if (o.slurm.empty() && (o.shards || !o.sbatch_options.empty() || o.submit)) {
       throw UsageError("--shards, --sbatch and --submit go with --slurm SCRIPT");
     }
-    if (!o.slurm.empty() && o.shard) throw UsageError("--shard and --slurm do not go together (each array task is a shard)");
+    if (!o.slurm.empty() && o.shard)
+      throw UsageError("--shard and --slurm do not go together (each array task is a shard)");
     for (const char* own : {"input", "stem", "out"}) {
       if (o.sets.count(own)) {
-        throw UsageError(std::string("--set ") + own + "=...: batch sets the variable " + own + " for each item itself");
+        throw UsageError(std::string("--set ") + own + "=...: batch sets the variable " + own +
+                         " for each item itself");
       }
     }
   }

@@ -19,8 +19,10 @@ namespace fs = std::filesystem;
 std::string quoted(const std::string& word) {
   std::string q = "'";
   for (char c : word) {
-    if (c == '\'') q += "'\\''";
-    else q += c;
+    if (c == '\'')
+      q += "'\\''";
+    else
+      q += c;
   }
   return q + "'";
 }
@@ -28,11 +30,13 @@ std::string quoted(const std::string& word) {
 // A value of an #SBATCH line, which sbatch reads like a shell word in double quotes. In a file
 // name % starts a pattern (%A the array job, %a the task), so `folder`'s own are doubled and
 // `pattern` follows it.
-std::string directive(const std::string& value, const fs::path& folder = {}, const std::string& pattern = "") {
+std::string directive(const std::string& value, const fs::path& folder = {},
+                      const std::string& pattern = "") {
   const std::string literal = folder.empty() ? value : folder.string();
   if (literal.find_first_of("\"\\\n") != std::string::npos) {
-    throw Failure{kExitUsage, "--slurm: '" + literal + "' has a quote, backslash or line break, which an #SBATCH "
-                                                      "line cannot hold: use another --out or graph name"};
+    throw Failure{kExitUsage, "--slurm: '" + literal +
+                                  "' has a quote, backslash or line break, which an #SBATCH "
+                                  "line cannot hold: use another --out or graph name"};
   }
   if (folder.empty()) return "\"" + value + "\"";
   std::string q = "\"";
@@ -58,7 +62,8 @@ std::string submit(const std::string& command) {
   while (std::fgets(buffer.data(), buffer.size(), pipe)) output += buffer.data();
   const int status = ::pclose(pipe);
   std::string id = output.substr(0, output.find_first_of(";\n"));
-  const bool numeric = !id.empty() && std::all_of(id.begin(), id.end(), [](char c) { return c >= '0' && c <= '9'; });
+  const bool numeric =
+      !id.empty() && std::all_of(id.begin(), id.end(), [](char c) { return c >= '0' && c <= '9'; });
   if (status != 0 || !numeric) throw Failure{kExitNodeFailed, "`" + command + "` failed: " + output};
   return id;
 }
@@ -69,10 +74,11 @@ fs::path merge_script_path(const fs::path& script) {
   return script.parent_path() / (script.stem().string() + ".merge" + script.extension().string());
 }
 
-int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& dir, const std::vector<fs::path>& inputs,
-                     const fs::path& executable) {
-  const int shards = std::max<int>(1, std::min<int>(static_cast<int>(inputs.size()),
-                                                    o.shards ? o.shards : std::min<int>(100, (static_cast<int>(inputs.size()) + 7) / 8)));
+int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& dir,
+                     const std::vector<fs::path>& inputs, const fs::path& executable) {
+  const int shards = std::max<int>(
+      1, std::min<int>(static_cast<int>(inputs.size()),
+                       o.shards ? o.shards : std::min<int>(100, (static_cast<int>(inputs.size()) + 7) / 8)));
   const int jobs = o.jobs_given ? o.jobs : 1;
   const fs::path script = fs::absolute(o.slurm).lexically_normal();
   const fs::path merge = merge_script_path(script);
@@ -92,21 +98,23 @@ int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& di
 
   std::ostringstream array;
   array << "#!/bin/bash\n"
-        << "# Written by `kinegraph batch --slurm`: " << inputs.size() << " inputs of " << graph.string() << " in "
-        << shards << " shards, one array task each.\n"
-        << "# Submit: jid=$(sbatch --parsable " << quoted(script.string()) << ") && sbatch --dependency=afterany:$jid "
-        << quoted(merge.string()) << "\n"
+        << "# Written by `kinegraph batch --slurm`: " << inputs.size() << " inputs of " << graph.string()
+        << " in " << shards << " shards, one array task each.\n"
+        << "# Submit: jid=$(sbatch --parsable " << quoted(script.string())
+        << ") && sbatch --dependency=afterany:$jid " << quoted(merge.string()) << "\n"
         << "#SBATCH --job-name=" << directive(name) << "\n"
         << "#SBATCH --array=0-" << shards - 1 << "\n"
         << "#SBATCH --cpus-per-task=" << jobs << "\n"
         << "#SBATCH --output=" << directive("", logs, "%A_%a.out") << "\n"
         << head.str() << "set -euo pipefail\n"
-        << "cd " << quoted(fs::current_path().string()) << "  # where the batch was written: relative paths hold\n"
+        << "cd " << quoted(fs::current_path().string())
+        << "  # where the batch was written: relative paths hold\n"
         << "exec " << quoted(executable.string()) << " batch " << quoted(graph.string()) << " --input-list "
-        << quoted(list.string()) << " --out " << quoted(dir.string()) << " --shard \"${SLURM_ARRAY_TASK_ID}/" << shards
-        << "\" --jobs \"${SLURM_CPUS_PER_TASK:-" << jobs << "}\"";
+        << quoted(list.string()) << " --out " << quoted(dir.string()) << " --shard \"${SLURM_ARRAY_TASK_ID}/"
+        << shards << "\" --jobs \"${SLURM_CPUS_PER_TASK:-" << jobs << "}\"";
   for (const auto& [key, value] : o.sets) array << " --set " << quoted(key + "=" + value);
-  for (const fs::path& plugins : o.plugin_dirs) array << " --plugin-dir " << quoted(fs::absolute(plugins).string());
+  for (const fs::path& plugins : o.plugin_dirs)
+    array << " --plugin-dir " << quoted(fs::absolute(plugins).string());
   if (o.force) array << " --force";
   array << '\n';
   write_script(script, array.str());
@@ -121,8 +129,8 @@ int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& di
          << "exec " << quoted(executable.string()) << " merge " << quoted(dir.string()) << '\n';
   write_script(merge, merger.str());
 
-  std::cout << "kinegraph: batch: wrote " << script.string() << " (" << shards << " array tasks over " << inputs.size()
-            << " inputs) and " << merge.string() << '\n';
+  std::cout << "kinegraph: batch: wrote " << script.string() << " (" << shards << " array tasks over "
+            << inputs.size() << " inputs) and " << merge.string() << '\n';
   if (!o.submit) {
     std::cout << "submit with: jid=$(sbatch --parsable " << quoted(script.string())
               << ") && sbatch --dependency=afterany:$jid " << quoted(merge.string()) << '\n';

@@ -15,7 +15,8 @@ namespace kg::app {
 
 // `graph`, `dir`, `inputs` and `executable` absolute. Returns the exit code; throws Failure.
 int write_slurm_jobs(const Options& o, const std::filesystem::path& graph, const std::filesystem::path& dir,
-                     const std::vector<std::filesystem::path>& inputs, const std::filesystem::path& executable);
+                     const std::vector<std::filesystem::path>& inputs,
+                     const std::filesystem::path& executable);
 
 // The merge script written beside `script`.
 std::filesystem::path merge_script_path(const std::filesystem::path& script);

@@ -9,11 +9,11 @@
 #include <atomic>
 #include <cerrno>
 #include <cstring>
+#include <exception>
+#include <fstream>
 #include <mutex>
 #include <set>
 #include <sstream>
-#include <exception>
-#include <fstream>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -119,7 +119,8 @@ bool is_input_file(const fs::path& path) {
 void write_file_atomically(const fs::path& target, const std::function<void(std::ostream&)>& write) {
   const std::string what = "cannot write '" + target.string() + "'";
   if (target.empty() || !target.has_filename()) throw std::runtime_error(what + ": not a file name");
-  if (is_input_file(target)) throw std::runtime_error(what + ": it is an input of this run and is never overwritten");
+  if (is_input_file(target))
+    throw std::runtime_error(what + ": it is an input of this run and is never overwritten");
 
   std::error_code ec;
   if (target.has_parent_path()) {

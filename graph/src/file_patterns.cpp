@@ -29,7 +29,8 @@ void walk(const fs::path& dir, const std::vector<std::string>& components, std::
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
       const std::string name = it->path().filename().string();
       // Links are not followed, as bash's globstar: a link to an ancestor would recurse forever.
-      if (name.front() != '.' && !it->is_symlink(ec) && it->is_directory(ec)) walk(it->path(), components, index, found);
+      if (name.front() != '.' && !it->is_symlink(ec) && it->is_directory(ec))
+        walk(it->path(), components, index, found);
     }
     return;
   }
@@ -39,7 +40,8 @@ void walk(const fs::path& dir, const std::vector<std::string>& components, std::
   }
   for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
-    if (::fnmatch(component.c_str(), name.c_str(), FNM_PERIOD) == 0) walk(it->path(), components, index + 1, found);
+    if (::fnmatch(component.c_str(), name.c_str(), FNM_PERIOD) == 0)
+      walk(it->path(), components, index + 1, found);
   }
 }
 
@@ -69,8 +71,8 @@ std::vector<fs::path> expand_file_patterns(const std::vector<std::string>& patte
     if (found.empty() && wild && fs::is_regular_file(absolute, ec)) found.insert(absolute);  // take[1].bvh
     if (found.empty()) {
       if (!wild && fs::is_directory(absolute, ec))
-        throw std::invalid_argument("input '" + pattern + "' is a folder (give a pattern such as '" + pattern +
-                                    "/*.bvh')");
+        throw std::invalid_argument("input '" + pattern + "' is a folder (give a pattern such as '" +
+                                    pattern + "/*.bvh')");
       throw std::invalid_argument(wild ? "input pattern '" + pattern + "' matches no file"
                                        : "no such input file: '" + pattern + "'");
     }

@@ -156,8 +156,8 @@ std::vector<ManifestRecord> read_manifest(const fs::path& file, std::vector<std:
     try {
       records.push_back(parse_manifest_line(line));
     } catch (const std::exception& e) {
-      problems.push_back(file.string() + ":" + std::to_string(number) + ": not a manifest record (" + e.what() +
-                         "); skipped, so its item runs again");
+      problems.push_back(file.string() + ":" + std::to_string(number) + ": not a manifest record (" +
+                         e.what() + "); skipped, so its item runs again");
     }
   }
   return records;
@@ -205,7 +205,8 @@ void write_batch_identity(const fs::path& file, const BatchIdentity& identity) {
 BatchIdentity read_batch_identity(const fs::path& file) {
   try {
     const YAML::Node object = YAML::LoadFile(file.string());
-    return {text_field(object, "graph"), text_field(object, "graph_sha256"), text_field(object, "settings_sha256")};
+    return {text_field(object, "graph"), text_field(object, "graph_sha256"),
+            text_field(object, "settings_sha256")};
   } catch (const std::exception& e) {
     throw std::runtime_error(file.string() + ": not a batch description: " + e.what());
   }

@@ -85,8 +85,8 @@ struct Setup {
   fs::path input(const std::string& name, const std::string& text) { return dir.write("in/" + name, text); }
 
   Result batch(std::vector<std::string> args) const {
-    std::vector<std::string> all{"batch", graph.string(), "--inputs", (dir / "in" / "*.txt").string(), "--out",
-                                 out.string(), "--plugin-dir", kTestPlugins};
+    std::vector<std::string> all{"batch", graph.string(), "--inputs",     (dir / "in" / "*.txt").string(),
+                                 "--out", out.string(),   "--plugin-dir", kTestPlugins};
     all.insert(all.end(), args.begin(), args.end());
     return kinegraph(all);
   }
@@ -110,7 +110,8 @@ struct Background {
     posix_spawnattr_setpgroup(&attributes, 0);
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
+                                     0644);
     posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
     const int spawned = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
@@ -150,7 +151,8 @@ std::vector<fs::path> temporaries(const fs::path& dir, bool logs_too = true) {
 
 }  // namespace
 
-TEST_CASE("batch runs the graph once per input, in parallel, with a log and a manifest line each", "[batch]") {
+TEST_CASE("batch runs the graph once per input, in parallel, with a log and a manifest line each",
+          "[batch]") {
   Setup s;
   for (int i = 1; i <= 6; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i) + "\n");
   const Result r = s.batch({"--jobs", "2"});
@@ -215,7 +217,8 @@ TEST_CASE("a malformed input or a crashing node fails its item only, and the bat
   }
 }
 
-TEST_CASE("batch resumes: done items are skipped until their input, graph, settings or outputs change", "[batch]") {
+TEST_CASE("batch resumes: done items are skipped until their input, graph, settings or outputs change",
+          "[batch]") {
   Setup s;
   for (int i = 1; i <= 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
   REQUIRE(s.batch({}).code == 0);
@@ -291,8 +294,8 @@ TEST_CASE("items writing the same output fail instead of overwriting each other 
   t.input("s1/a.txt", "1");
   t.input("s2/a.txt", "2");
   auto into = [&](const std::string& folder) {
-    return kinegraph({"batch", t.graph.string(), "--inputs", (t.dir / "in" / folder / "*.txt").string(), "--out",
-                      t.out.string(), "--plugin-dir", kTestPlugins});
+    return kinegraph({"batch", t.graph.string(), "--inputs", (t.dir / "in" / folder / "*.txt").string(),
+                      "--out", t.out.string(), "--plugin-dir", kTestPlugins});
   };
   REQUIRE(into("s1").code == 0);
   r = into("s2");
@@ -302,12 +305,13 @@ TEST_CASE("items writing the same output fail instead of overwriting each other 
   CHECK_THAT(r.out, Contains("1 ran"));
 }
 
-TEST_CASE("an edited graph fails the items that have not started; a second batch into the same folder is refused",
-          "[batch]") {
+TEST_CASE(
+    "an edited graph fails the items that have not started; a second batch into the same folder is refused",
+    "[batch]") {
   Setup s;
   for (int i = 0; i < 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
-  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out", s.out.string(),
-                    "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
+  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
+                    s.out.string(), "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
                    s.dir / "stderr.txt");
   REQUIRE(batch.pid > 0);
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
@@ -338,8 +342,8 @@ TEST_CASE("a worker killed outright fails its item only and leaves no temporary 
   Setup s;
   s.input("a.txt", "1");
   s.input("b.txt", "2");
-  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out", s.out.string(),
-                    "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
+  Background batch({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
+                    s.out.string(), "--plugin-dir", kTestPlugins, "--jobs", "1", "--set", "write_seconds=1"},
                    s.dir / "stderr.txt");
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
   while (temporaries(s.dir.path(), false).empty() && std::chrono::steady_clock::now() < deadline)
@@ -363,8 +367,9 @@ TEST_CASE("a worker killed outright fails its item only and leaves no temporary 
   CHECK(killed == 1);
 }
 
-TEST_CASE("inputs: a list names files as written, a missing one fails its item; outputs under --out are no inputs",
-          "[batch]") {
+TEST_CASE(
+    "inputs: a list names files as written, a missing one fails its item; outputs under --out are no inputs",
+    "[batch]") {
   Setup s;
   s.input("take[1].txt", "1");
   s.input("b.txt", "2");
@@ -378,8 +383,8 @@ TEST_CASE("inputs: a list names files as written, a missing one fails its item; 
   CHECK(read_file(s.out / "take[1]" / "take[1].txt") == "2\n");
 
   // A literal name with brackets through --inputs too, and options after --inputs end the list.
-  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "take[1].txt").string(), "-j", "1", "--out",
-                 (s.dir / "other").string(), "--plugin-dir", kTestPlugins});
+  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "take[1].txt").string(), "-j", "1",
+                 "--out", (s.dir / "other").string(), "--plugin-dir", kTestPlugins});
   CHECK(r.code == 0);
 
   // --out inside the inputs' folder: the outputs of one run are not inputs of the next.
@@ -419,9 +424,10 @@ TEST_CASE("shards split the items deterministically and merge recovers the whole
   CHECK_THAT(whole.out, Contains("5 already done"));
 }
 
-TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slurm runs them, give the local "
-          "outputs",
-          "[batch]") {
+TEST_CASE(
+    "batch with slurm writes an array job and a merge job that, run as Slurm runs them, give the local "
+    "outputs",
+    "[batch]") {
   Setup s;
   for (int i = 0; i < 5; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(10 + i));
   const fs::path script = s.dir / "jobs" / "double.sbatch";
@@ -443,8 +449,9 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
   CHECK_FALSE(fs::exists(s.out / "manifest.jsonl"));  // nothing ran
 
   for (int task = 0; task < 3; ++task) {
-    const Result r = kg::test::run_program("/bin/bash", {script.string()},
-                                           {"SLURM_ARRAY_TASK_ID=" + std::to_string(task), "SLURM_CPUS_PER_TASK=1"});
+    const Result r =
+        kg::test::run_program("/bin/bash", {script.string()},
+                              {"SLURM_ARRAY_TASK_ID=" + std::to_string(task), "SLURM_CPUS_PER_TASK=1"});
     INFO(show(r));
     REQUIRE(r.code == 0);
   }
@@ -455,8 +462,9 @@ TEST_CASE("batch with slurm writes an array job and a merge job that, run as Slu
 
   // The same batch on this machine alone: byte-identical outputs.
   const fs::path local = s.dir / "local";
-  const Result r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
-                              local.string(), "--plugin-dir", kTestPlugins, "--set", "write_seconds=0"});
+  const Result r =
+      kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(), "--out",
+                 local.string(), "--plugin-dir", kTestPlugins, "--set", "write_seconds=0"});
   REQUIRE(r.code == 0);
   const auto cluster = manifest_by_item(s.out / "manifest.jsonl");
   const auto here = manifest_by_item(local / "manifest.jsonl");
@@ -494,9 +502,12 @@ TEST_CASE("Ctrl-C stops the batch at once, leaves no partial output, and the sam
           "[batch]") {
   Setup s;
   for (int i = 0; i < 4; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
-  const std::vector<std::string> args{"batch", s.graph.string(), "--inputs", (s.dir / "in" / "*.txt").string(),
-                                      "--out", s.out.string(), "--plugin-dir", kTestPlugins, "--jobs", "2",
-                                      "--set", "write_seconds=3"};
+  const std::vector<std::string> args{"batch",        s.graph.string(),
+                                      "--inputs",     (s.dir / "in" / "*.txt").string(),
+                                      "--out",        s.out.string(),
+                                      "--plugin-dir", kTestPlugins,
+                                      "--jobs",       "2",
+                                      "--set",        "write_seconds=3"};
 
   Background batch(args, s.dir / "stderr.txt");
   REQUIRE(batch.pid > 0);
@@ -513,8 +524,10 @@ TEST_CASE("Ctrl-C stops the batch at once, leaves no partial output, and the sam
   CHECK_THAT(read_file(batch.err), Contains("interrupted"));
   CHECK(temporaries(s.dir.path()).empty());
   // Nor the finished outputs of the items stopped: an item writes all its outputs or none.
-  for (int i = 0; i < 4; ++i) CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".early.txt")));
-  for (int i = 0; i < 4; ++i) CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".txt")));
+  for (int i = 0; i < 4; ++i)
+    CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".early.txt")));
+  for (int i = 0; i < 4; ++i)
+    CHECK_FALSE(fs::exists(s.out / ("n" + std::to_string(i)) / ("n" + std::to_string(i) + ".txt")));
   CHECK(manifest_by_item(s.out / "manifest.jsonl").empty());
 
   std::vector<std::string> resume = args;
@@ -551,9 +564,9 @@ TEST_CASE("on a terminal, batch redraws one progress bar with counts, rate and E
   for (int i = 0; i < 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
   s.input("bad.txt", "x");
   std::string command = (fs::path(KG_BINARY_DIR) / "bin" / "kinegraph").string();
-  for (const std::string& arg : {std::string("batch"), s.graph.string(), std::string("--inputs"),
-                                 (s.dir / "in" / "*.txt").string(), std::string("--out"), s.out.string(),
-                                 std::string("--plugin-dir"), kTestPlugins})
+  for (const std::string& arg :
+       {std::string("batch"), s.graph.string(), std::string("--inputs"), (s.dir / "in" / "*.txt").string(),
+        std::string("--out"), s.out.string(), std::string("--plugin-dir"), kTestPlugins})
     command += " '" + arg + "'";
   const Result r = kg::test::run_program("/usr/bin/script", {"-qec", command, "/dev/null"}, {"TERM=xterm"});
   INFO(show(r));
@@ -572,18 +585,19 @@ TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("batch sets the variable stem for each item itself"));
 
-  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "none" / "*.bvh").string(), "--out", s.out.string(),
-                 "--plugin-dir", kTestPlugins});
+  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "none" / "*.bvh").string(), "--out",
+                 s.out.string(), "--plugin-dir", kTestPlugins});
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("matches no file"));
 
   s.input("a.dat", "3");
-  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "a.*").string(), "--out", s.out.string(),
-                 "--plugin-dir", kTestPlugins});
+  r = kinegraph({"batch", s.graph.string(), "--inputs", (s.dir / "in" / "a.*").string(), "--out",
+                 s.out.string(), "--plugin-dir", kTestPlugins});
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("differ only in their extension"));
 
-  r = s.batch({"--slurm", (s.dir / "jobs.sbatch").string(), "--set", "bogus=1"});  // checked before writing jobs
+  r = s.batch(
+      {"--slurm", (s.dir / "jobs.sbatch").string(), "--set", "bogus=1"});  // checked before writing jobs
   CHECK(r.code == 3);
   CHECK_THAT(r.err, Contains("declares no variable 'bogus'"));
   CHECK_FALSE(fs::exists(s.dir / "jobs.sbatch"));
@@ -596,14 +610,17 @@ TEST_CASE("batch refuses bad usage before running anything", "[batch]") {
   CHECK(r.code == 2);
   CHECK_THAT(r.err, Contains("batch needs --inputs"));
 
-  const fs::path no_input = s.dir.write("no_input.yaml", "version: 1\nvariables:\n  out: {default: x}\nnodes: {}\n");
-  r = kinegraph({"batch", no_input.string(), "--inputs", (s.dir / "in" / "a.txt").string(), "--out", s.out.string()});
+  const fs::path no_input =
+      s.dir.write("no_input.yaml", "version: 1\nvariables:\n  out: {default: x}\nnodes: {}\n");
+  r = kinegraph(
+      {"batch", no_input.string(), "--inputs", (s.dir / "in" / "a.txt").string(), "--out", s.out.string()});
   CHECK(r.code == 3);
   CHECK_THAT(r.err, Contains("declares no variable 'input'"));
 
-  const fs::path broken = s.dir.write("broken.yaml", std::string(kDoubleGraph) + "  - {from: read.nothing, to: print.value}\n");
-  r = kinegraph({"batch", broken.string(), "--inputs", (s.dir / "in" / "a.txt").string(), "--out", s.out.string(),
-                 "--plugin-dir", kTestPlugins});
+  const fs::path broken =
+      s.dir.write("broken.yaml", std::string(kDoubleGraph) + "  - {from: read.nothing, to: print.value}\n");
+  r = kinegraph({"batch", broken.string(), "--inputs", (s.dir / "in" / "a.txt").string(), "--out",
+                 s.out.string(), "--plugin-dir", kTestPlugins});
   CHECK(r.code == 3);
   CHECK_THAT(r.err, Contains("broken.yaml:"));
   CHECK_FALSE(fs::exists(s.out / "manifest.jsonl"));

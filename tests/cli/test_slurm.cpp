@@ -46,7 +46,8 @@ class Cluster {
   const Result& started() const { return started_; }
   std::string conf() const { return "SLURM_CONF=" + (dir_ / "slurm.conf").string(); }
   Result wait(const std::string& job, int timeout_seconds) const {
-    return run_program("/bin/bash", {kClusterScript.string(), "wait", dir_.string(), job, std::to_string(timeout_seconds)},
+    return run_program("/bin/bash",
+                       {kClusterScript.string(), "wait", dir_.string(), job, std::to_string(timeout_seconds)},
                        {conf()});
   }
 
@@ -72,11 +73,10 @@ TEST_CASE("batch --slurm --submit on a real Slurm cluster gives the local batch'
   const std::string clips = (kData / "cmu" / "**" / "*.bvh").string();
   const std::string graph = (fs::path(KG_SOURCE_DIR) / "graphs" / "convert.yaml").string();
   const fs::path out = dir / "cluster out%1";  // sbatch reads a space and a % in #SBATCH lines its own way
-  const Result submitted =
-      kinegraph({"batch", graph, "--inputs", clips, "--out", out.string(), "--slurm",
-                 (dir / "jobs" / "convert.sbatch").string(), "--shards", "4", "--submit", "--set", "resample=30",
-                 "--sbatch=--time=00:10:00"},
-                {cluster.conf()});
+  const Result submitted = kinegraph({"batch", graph, "--inputs", clips, "--out", out.string(), "--slurm",
+                                      (dir / "jobs" / "convert.sbatch").string(), "--shards", "4", "--submit",
+                                      "--set", "resample=30", "--sbatch=--time=00:10:00"},
+                                     {cluster.conf()});
   INFO(show(submitted));
   REQUIRE(submitted.code == 0);
   std::istringstream words(submitted.out.substr(submitted.out.find("submitted array job")));

@@ -30,7 +30,8 @@ const fs::path kData = KG_DATA_DIR;
 
 }  // namespace
 
-TEST_CASE("every graph in graphs/ that takes an input defaults its outputs from out and stem", "[graphs][batch]") {
+TEST_CASE("every graph in graphs/ that takes an input defaults its outputs from out and stem",
+          "[graphs][batch]") {
   int checked = 0;
   for (const auto& entry : fs::recursive_directory_iterator(kSource / "graphs")) {
     if (entry.path().extension() != ".yaml") continue;
@@ -55,8 +56,10 @@ TEST_CASE("every graph in graphs/ that takes an input defaults its outputs from 
   CHECK(checked >= 8);
 }
 
-TEST_CASE("batch of graphs/retarget.yaml over CMU clips: outputs below each item's folder, the same bytes every run",
-          "[graphs][batch]") {
+TEST_CASE(
+    "batch of graphs/retarget.yaml over CMU clips: outputs below each item's folder, the same bytes every "
+    "run",
+    "[graphs][batch]") {
   const fs::path walk = kData / "cmu" / "bvh_motionbuilder" / "16_15.bvh";
   const fs::path run = kData / "cmu" / "bvh_daz" / "09_06.bvh";
   if (!fs::exists(walk) || !fs::exists(run)) {
@@ -66,7 +69,8 @@ TEST_CASE("batch of graphs/retarget.yaml over CMU clips: outputs below each item
   TempDir dir;
   const std::string graph = (kSource / "graphs" / "retarget.yaml").string();
   auto batch = [&](const fs::path& out) {
-    return kinegraph({"batch", graph, "--inputs", walk.string(), run.string(), "--out", out.string(), "--jobs", "2"});
+    return kinegraph(
+        {"batch", graph, "--inputs", walk.string(), run.string(), "--out", out.string(), "--jobs", "2"});
   };
   const Result first = batch(dir / "first");
   const Result second = batch(dir / "second");
@@ -86,9 +90,10 @@ TEST_CASE("batch of graphs/retarget.yaml over CMU clips: outputs below each item
       CHECK(read_file(dir / "first" / path) == read_file(dir / "second" / path));
     }
     CHECK(record["figures"]["solve.seconds"].as<double>() > 0);  // the time is a figure, not in a file
-    const YAML::Node metrics = YAML::LoadFile((dir / "first" / item / (record["stem"].as<std::string>() +
-                                                                       "_metrics.json")).string());
+    const YAML::Node metrics = YAML::LoadFile(
+        (dir / "first" / item / (record["stem"].as<std::string>() + "_metrics.json")).string());
     CHECK(metrics["solve_seconds"].IsNull());
-    CHECK(b.at(item)["outputs"][0]["sha256"].as<std::string>() == record["outputs"][0]["sha256"].as<std::string>());
+    CHECK(b.at(item)["outputs"][0]["sha256"].as<std::string>() ==
+          record["outputs"][0]["sha256"].as<std::string>());
   }
 }

@@ -3,11 +3,12 @@
 // line is skipped with a warning). Later lines supersede earlier ones for the same input; a batch
 // compacts its manifest to one line per item when it ends.
 //
-//   {"input":"/data/16_15.bvh","stem":"16_15","item":"16_15","status":"ok","message":"","wall_seconds":1.2,
-//    "graph_seconds":1.1,"log":"logs/16_15.log","outputs":[{"path":"16_15/16_15.bvh",
-//    "sha256":"...","bytes":81234}],"reads":[{"path":"/data/16_15.bvh","sha256":"...","bytes":9}],"figures":{"solve.iterations":12},"input_sha256":"...",
-//    "graph_sha256":"...","settings_sha256":"...","finished_at":"2026-11-22T07:00:00Z",
-//    "host":"node1","shard":"0/4"}
+//   {"input":"/data/16_15.bvh","stem":"16_15","item":"16_15","status":"ok","message":"",
+//    "wall_seconds":1.2,"graph_seconds":1.1,"log":"logs/16_15.log",
+//    "outputs":[{"path":"16_15/16_15.bvh","sha256":"...","bytes":81234}],
+//    "reads":[{"path":"/data/16_15.bvh","sha256":"...","bytes":306099}],
+//    "figures":{"solve.iterations":12},"input_sha256":"...","graph_sha256":"...",
+//    "settings_sha256":"...","finished_at":"2026-11-22T07:00:00Z","host":"node1","shard":"0/4"}
 #pragma once
 
 #include <cstdint>
@@ -28,11 +29,11 @@ struct ManifestFile {
 };
 
 struct ManifestRecord {
-  std::string input;   // absolute path: the item's key
-  std::string stem;    // the input's name without extension (the graph's ${stem})
-  std::string item;    // its folder and log name below the batch folder, e.g. "bvh_daz/07_05"
-  std::string status;  // "ok" or "failed"
-  std::string message;  // why it failed; empty when ok
+  std::string input;         // absolute path: the item's key
+  std::string stem;          // the input's name without extension (the graph's ${stem})
+  std::string item;          // its folder and log name below the batch folder, e.g. "bvh_daz/07_05"
+  std::string status;        // "ok" or "failed"
+  std::string message;       // why it failed; empty when ok
   double wall_seconds = 0;   // the item's whole time: graph loading, run, hashing outputs
   double graph_seconds = 0;  // the graph's own run
   std::string log;           // relative to the batch folder
@@ -56,7 +57,8 @@ ManifestRecord parse_manifest_line(const std::string& line);
 // The records of a manifest file in file order. Lines that do not read as a record (a torn last
 // line of an interrupted run, a hand edit) are skipped, each adding "file:line: why" to
 // `problems`. A missing file has no records.
-std::vector<ManifestRecord> read_manifest(const std::filesystem::path& file, std::vector<std::string>& problems);
+std::vector<ManifestRecord> read_manifest(const std::filesystem::path& file,
+                                          std::vector<std::string>& problems);
 
 // The latest record per input (by finished_at, then by order given), in order of first appearance.
 std::vector<ManifestRecord> latest_records(const std::vector<ManifestRecord>& records);
