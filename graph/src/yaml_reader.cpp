@@ -108,12 +108,15 @@ void YamlReader::check_version(const std::vector<Entry>& top) const {
 double YamlReader::number(const YAML::Node& n, const std::string& what, bool allow_infinite) const {
   if (!n.IsScalar()) fail(what + ": expected a number", n);
   const std::string& text = n.Scalar();
-  if (allow_infinite) {
-    std::string t = text;
-    std::transform(t.begin(), t.end(), t.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-    if (t == ".inf" || t == "+.inf" || t == "inf" || t == "+inf") return std::numeric_limits<double>::infinity();
-    if (t == "-.inf" || t == "-inf") return -std::numeric_limits<double>::infinity();
-  }
+  std::string t = text;
+  std::transform(t.begin(), t.end(), t.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const bool plus = t == ".inf" || t == "+.inf" || t == "inf" || t == "+inf";
+  const bool minus = t == "-.inf" || t == "-inf";
+  if ((plus || minus) && !allow_infinite)
+    fail(what + ": infinity is not allowed here (expected a finite number), got " + in_quotes(text), n);
+  if (plus) return std::numeric_limits<double>::infinity();
+  if (minus) return -std::numeric_limits<double>::infinity();
   double v = 0;
   std::istringstream in(text);
   in >> v;

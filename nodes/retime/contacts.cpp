@@ -221,7 +221,7 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
     if (j < 0) {
       std::string msg = "contacts: unknown foot joint '" + name + "'";
       const std::string near = retarget::nearest_joint_name(sk, name);
-      if (!near.empty()) msg += " (nearest: '" + near + "')";
+      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
       throw std::invalid_argument(msg);
     }
     feet.push_back(j);

@@ -61,10 +61,6 @@ class Reader : public graph::YamlReader {
   }
 
  private:
-  double as_double(const YAML::Node& n, const std::string& what) const { return number(n, what, true); }
-
-
-
   int joint(const YAML::Node& n, const std::string& what) const {
     const std::string name = text(n, what);
     const motion::Skeleton& sk = *motion_.skeleton;
@@ -72,7 +68,7 @@ class Reader : public graph::YamlReader {
     if (j >= 0) return j;
     std::string msg = what + ": unknown joint '" + name + "'";
     const std::string near = retarget::nearest_joint_name(sk, name);
-    if (!near.empty()) msg += " (nearest: '" + near + "')";
+    if (!near.empty()) msg += " (did you mean '" + near + "'?)";
     fail(msg, n.Mark());
   }
 
@@ -80,8 +76,7 @@ class Reader : public graph::YamlReader {
     if (!n.IsSequence() || n.size() != 3)
       fail(what + ": expected [x, y, z] (metres, in the joint's frame)", n.Mark());
     Eigen::Vector3d v;
-    for (int i = 0; i < 3; ++i) v[i] = as_double(n[static_cast<std::size_t>(i)], what);
-    if (!v.allFinite()) fail(what + ": not finite", n.Mark());
+    for (int i = 0; i < 3; ++i) v[i] = number(n[static_cast<std::size_t>(i)], what);
     return v;
   }
 
@@ -94,8 +89,8 @@ class Reader : public graph::YamlReader {
     for (std::size_t i = 0; i < 2; ++i) {
       const YAML::Node x = n[i];
       if (seconds) {
-        const double t = as_double(x, what);
-        if (!std::isfinite(t) || t < 0) fail(what + ": a time must be finite and >= 0 s", x.Mark());
+        const double t = number(x, what);
+        if (t < 0) fail(what + ": a time must be >= 0 s", x.Mark());
         ends[i] = static_cast<int>(std::lround(t * motion_.fps));
       } else {
         ends[i] = integer(x, what);

@@ -1,9 +1,12 @@
 #include "kg/retime/path.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include <Eigen/QR>
 
 #include "kg/motion/rotations.hpp"
 
@@ -11,8 +14,12 @@ namespace kg::retime {
 
 namespace {
 
-// Each column convolved with a normalised Gaussian of `sigma` frames, the ends extended by odd
-// reflection (2 q[0] - q[k] before the start, likewise after the end).
+// Each column convolved with a normalised Gaussian of `sigma` frames. Past each end the clip
+// continues as the least-squares parabola through the frames within the kernel's reach of that
+// end (the whole clip when it is shorter than the kernel; the line through two frames): a
+// parabola, a ballistic flight, keeps its second derivative exactly to the last frame, where
+// an odd reflection would bend it straight, and a clip shorter than the kernel reads nothing
+// outside itself.
 motion::FrameMatrix gaussian_smoothed(const motion::FrameMatrix& q, double sigma) {
   const int frames = static_cast<int>(q.rows());
   const int radius = static_cast<int>(std::ceil(4 * sigma));
@@ -20,9 +27,24 @@ motion::FrameMatrix gaussian_smoothed(const motion::FrameMatrix& q, double sigma
   double sum = 0;
   for (int k = -radius; k <= radius; ++k) sum += kernel[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * k * k / (sigma * sigma));
   for (double& w : kernel) w /= sum;
+  // The continuations: coefficients of powers of u = (frames from the end, inwards) / reach.
+  const int reach = std::min(frames, radius + 1);
+  const int degree = std::min(2, reach - 1);
+  Eigen::MatrixXd powers(reach, degree + 1);
+  for (int k = 0; k < reach; ++k)
+    for (int d = 0; d <= degree; ++d) powers(k, d) = std::pow(static_cast<double>(k) / reach, d);
+  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> fit(powers);
+  const Eigen::MatrixXd head = fit.solve(Eigen::MatrixXd(q.topRows(reach)));
+  const Eigen::MatrixXd tail = fit.solve(Eigen::MatrixXd(q.bottomRows(reach).colwise().reverse()));
+  auto continued = [&](const Eigen::MatrixXd& coefficients, int inwards, Eigen::Index c) {
+    const double u = static_cast<double>(inwards) / reach;
+    double v = 0;
+    for (int d = degree; d >= 0; --d) v = v * u + coefficients(d, c);
+    return v;
+  };
   auto at = [&](int f, Eigen::Index c) {
-    if (f < 0) return 2 * q(0, c) - q(std::min(-f, frames - 1), c);
-    if (f >= frames) return 2 * q(frames - 1, c) - q(std::max(2 * (frames - 1) - f, 0), c);
+    if (f < 0) return continued(head, f, c);
+    if (f >= frames) return continued(tail, frames - 1 - f, c);
     return q(f, c);
   };
   motion::FrameMatrix out(q.rows(), q.cols());

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <iomanip>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 
@@ -12,17 +13,28 @@ namespace kg::retime {
 
 namespace {
 
-int output_frames(const TimeWarp& warp, double fps) {
-  if (!(fps > 0) || !std::isfinite(fps))
-    throw std::invalid_argument("retimed playback: fps " + std::to_string(fps) + " (expected > 0)");
-  return static_cast<int>(std::floor(warp.duration * fps + 1e-9)) + 1;
+std::string shown(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
 }
 
 }  // namespace
 
+int output_frame_count(const TimeWarp& warp, double fps) {
+  if (!(fps > 0) || !std::isfinite(fps))
+    throw std::invalid_argument("retimed playback: fps " + shown(fps) + " (expected > 0)");
+  const double frames = std::floor(warp.duration * fps + 1e-9) + 1;
+  if (!(frames <= kMaxOutputFrames))
+    throw std::invalid_argument("retimed playback: " + shown(warp.duration) + " s at fps " + shown(fps) +
+                                " is " + shown(frames) + " frames (expected at most " +
+                                std::to_string(kMaxOutputFrames) + ")");
+  return static_cast<int>(frames);
+}
+
 motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps) {
   source.check();
-  const int frames = output_frames(warp, fps);
+  const int frames = output_frame_count(warp, fps);
   if (std::abs(warp.source_duration - source.duration()) > 0.5 / source.fps)
     throw std::invalid_argument("retimed playback: the warp plays " + std::to_string(warp.source_duration) +
                                 " s of source but the clip '" + source.name + "' lasts " +
@@ -39,7 +51,7 @@ motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp
 }
 
 void write_warp_csv(std::ostream& os, const TimeWarp& warp, double fps) {
-  const int frames = output_frames(warp, fps);
+  const int frames = output_frame_count(warp, fps);
   os << "t,p,pdot,pddot\n" << std::setprecision(10);
   for (int k = 0; k < frames; ++k) {
     const WarpSample s = warp.sample(k / fps);
@@ -48,7 +60,7 @@ void write_warp_csv(std::ostream& os, const TimeWarp& warp, double fps) {
 }
 
 void write_warp_json(std::ostream& os, const TimeWarp& warp, double fps) {
-  const int frames = output_frames(warp, fps);
+  const int frames = output_frame_count(warp, fps);
   std::vector<double> t, p, pdot, pddot;
   for (int k = 0; k < frames; ++k) {
     const WarpSample s = warp.sample(k / fps);

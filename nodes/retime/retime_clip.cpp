@@ -7,6 +7,7 @@
 
 #include "kg/graph/json.hpp"
 #include "kg/retime/force_model.hpp"
+#include "kg/retime/playback.hpp"
 
 namespace kg::retime {
 
@@ -139,7 +140,7 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
     out.feasibility += w * parts.feasibility;
     out.torque += w * parts.torque;
   }
-  out.output_frames = static_cast<int>(std::floor(out.warp.duration * fps + 1e-9)) + 1;
+  out.output_frames = output_frame_count(out.warp, fps);
   int feasible_frames = 0, inside = 0, point_frames = 0, at_point = 0;
   for (int k = 0; k < out.output_frames; ++k) {
     const WarpSample s = out.warp.sample(k / fps);

@@ -26,6 +26,12 @@ using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
 
+std::string shown(double x) {
+  std::ostringstream out;
+  out << x;
+  return out.str();
+}
+
 // "9.81" (straight down) or three numbers (a world vector), m/s²; empty: `fallback`.
 Eigen::Vector3d gravity_from(const std::vector<double>& values, const Eigen::Vector3d& fallback) {
   if (values.empty()) return fallback;
@@ -278,7 +284,12 @@ class RetimeNode final : public graph::Node {
     if (sources.size() != outputs.size())
       throw std::invalid_argument("pin_source has " + std::to_string(sources.size()) + " times and pin_output " +
                                   std::to_string(outputs.size()) + " (expected one output time per source time)");
-    for (std::size_t i = 0; i < sources.size(); ++i) options_.solve.pins.push_back({sources[i], outputs[i]});
+    for (std::size_t i = 0; i < sources.size(); ++i) {
+      if (!std::isfinite(sources[i]) || !std::isfinite(outputs[i]))
+        throw std::invalid_argument("pin " + std::to_string(i) + ": pin_source " + shown(sources[i]) +
+                                    " s, pin_output " + shown(outputs[i]) + " s (expected finite seconds)");
+      options_.solve.pins.push_back({sources[i], outputs[i]});
+    }
     const std::string objective = p.get<std::string>("objective");
     options_.target = objective == "minimal"     ? TorqueTarget::Zero
                       : objective == "reference" ? TorqueTarget::Reference
@@ -288,6 +299,11 @@ class RetimeNode final : public graph::Node {
     options_.beta = p.get<double>("beta");
     options_.solve.knot_spacing = options_.time_optimal.knot_spacing = p.get<double>("knot_spacing");
     options_.inside_tolerance = p.get<double>("inside_tolerance");
+    if (duration_ > 0 && duration_ / options_.solve.knot_spacing > kMaxSegments)
+      throw std::invalid_argument(
+          "knot_spacing " + shown(options_.solve.knot_spacing) + " s cuts the " + shown(duration_) +
+          " s duration into more than " + std::to_string(kMaxSegments) +
+          " segments (expected knot_spacing >= " + shown(duration_ / kMaxSegments) + " s)");
   }
 
   void run(RunContext& ctx) const override {
@@ -322,19 +338,11 @@ class RetimeNode final : public graph::Node {
     ctx.report("share_at_point", r.share_at_point);
     if (r.shortest && r.shortest->feasible) ctx.report("shortest_duration", r.shortest->duration);
     ctx.report("message", r.message);
-    if (r.warp.controls.empty()) throw std::runtime_error(r.message);  // time-optimal with no feasible timing
-    if (strict_ && !r.feasible) throw std::runtime_error(r.message);
-
+    // Time-optimal with no feasible timing, or a strict request out of reach: the report says why
+    // (and the shortest feasible duration), nothing else is written.
+    const bool failed = r.warp.controls.empty() || (strict_ && !r.feasible);
     const double fps = fps_ > 0 ? fps_ : motion.fps;
-    if (!curves_.empty()) {
-      const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
-      graph::write_file_atomically(curves_, [&](std::ostream& os) {
-        json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
-      });
-    }
-    if (!forces_.empty())
-      graph::write_file_atomically(
-          forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
+    const int frames = failed ? 0 : output_frame_count(r.warp, fps);  // refuses a count too large first
     if (!report_.empty())
       graph::write_file_atomically(report_, [&](std::ostream& os) {
         graph::JsonWriter w(os);
@@ -352,16 +360,29 @@ class RetimeNode final : public graph::Node {
         w.field("torque_scale_nm", r.torque_scale);
         w.field("share_inside", r.share_inside);
         w.field("share_at_point", r.share_at_point);
-        w.field("output_frames", r.output_frames);
+        w.field("fps", fps);
+        w.field("output_frames", frames);  // as written
         w.field("frames_feasible", hulls.count(HullStatus::Feasible));
         w.field("frames_flight", hulls.count(HullStatus::Flight));
         w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
         if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
         w.field("feasible", r.feasible);
+        w.field("failed", failed);
         w.field("message", r.message);
         w.end_object();
         os << '\n';
       });
+    if (failed) throw std::runtime_error(r.message);
+
+    if (!curves_.empty()) {
+      const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
+      graph::write_file_atomically(curves_, [&](std::ostream& os) {
+        json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
+      });
+    }
+    if (!forces_.empty())
+      graph::write_file_atomically(
+          forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
     ctx.output("warp", r.warp);
     ctx.output("motion", retimed_motion(motion, r.warp, fps));
   }
@@ -438,7 +459,8 @@ NodeType retime_node_type() {
           {.name = "knot_spacing",
            .type = ParamType::Float,
            .default_value = 0.1,
-           .doc = "output seconds between the spline's control points",
+           .doc = "output seconds between the spline's control points (at most 4096 segments over the "
+                  "duration)",
            .min = 1e-3,
            .max = 1e3},
           {.name = "inside_tolerance",
@@ -464,11 +486,14 @@ NodeType retime_node_type() {
           {.name = "report",
            .type = ParamType::OutputPath,
            .default_value = std::string(),
-           .doc = "the objective's parts, share of frames inside their hulls, convergence (JSON); \"\" writes none"},
+           .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
+                  "at `fps` (JSON); written also when the node fails (failed: true, feasible, "
+                  "shortest_duration); \"\" writes none"},
           {.name = "strict",
            .type = ParamType::Bool,
            .default_value = false,
-           .doc = "fail (non-zero exit, nothing written) when an output frame lies outside its hull"}}};
+           .doc = "fail (non-zero exit, no motion, curves or forces; the report only, saying why) when "
+                  "an output frame lies outside its hull"}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<RetimeNode>(p); }};
 }
 

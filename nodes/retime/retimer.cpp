@@ -3,7 +3,9 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
+#include <string>
 
 #include <ceres/first_order_function.h>
 #include <ceres/gradient_problem.h>
@@ -97,15 +99,45 @@ class WarpFunction final : public ceres::FirstOrderFunction {
 
 }  // namespace
 
+namespace {
+
+std::string shown(double x) {
+  std::ostringstream out;
+  out.precision(6);
+  out << x;
+  return out.str();
+}
+
+// Throws std::invalid_argument naming the first option out of range; returns the segment count.
+int checked_segments(const RetimeOptions& options) {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("retime: " + what); };
+  if (!(options.duration > 0) || !std::isfinite(options.duration))
+    fail("duration " + shown(options.duration) + " s (expected a finite number > 0)");
+  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing))
+    fail("knot_spacing " + shown(options.knot_spacing) + " s (expected a finite number > 0)");
+  const double segments = std::ceil(options.duration / options.knot_spacing - 1e-9);
+  if (segments > kMaxSegments)
+    fail("knot_spacing " + shown(options.knot_spacing) + " s cuts the " + shown(options.duration) +
+         " s output into " + shown(segments) + " segments (expected at most " + std::to_string(kMaxSegments) +
+         ": knot_spacing >= " + shown(options.duration / kMaxSegments) + " s)");
+  if (options.samples_per_frame < 1 || options.samples_per_frame > kMaxSamplesPerFrame)
+    fail("samples_per_frame " + std::to_string(options.samples_per_frame) + " (expected 1 to " +
+         std::to_string(kMaxSamplesPerFrame) + ")");
+  if (options.max_iterations < 1)
+    fail("max_iterations " + std::to_string(options.max_iterations) + " (expected >= 1)");
+  if (!(options.function_tolerance >= 0) || !std::isfinite(options.function_tolerance))
+    fail("function_tolerance " + shown(options.function_tolerance) + " (expected a finite number >= 0)");
+  if (!(options.gradient_tolerance >= 0) || !std::isfinite(options.gradient_tolerance))
+    fail("gradient_tolerance " + shown(options.gradient_tolerance) + " (expected a finite number >= 0)");
+  return std::max(1, static_cast<int>(segments));
+}
+
+}  // namespace
+
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options) {
   const auto start = std::chrono::steady_clock::now();
-  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing))
-    throw std::invalid_argument("retime: knot spacing " + std::to_string(options.knot_spacing) + " s (expected > 0)");
-  if (options.samples_per_frame < 1)
-    throw std::invalid_argument("retime: " + std::to_string(options.samples_per_frame) +
-                                " samples per frame (expected >= 1)");
+  const int segments = checked_segments(options);
   const double source_duration = objective.source_duration();
-  const int segments = std::max(1, static_cast<int>(std::ceil(options.duration / options.knot_spacing - 1e-9)));
   TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins);
   const WarpConstraints constraints = warp_constraints(source_duration, options.duration, segments, options.pins);
 
@@ -122,14 +154,24 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
   const double initial_cost = std::abs(integrate(objective, warp, samples));
   const double barrier = 1e-6 * initial_cost / (segments + 3) + 1e-12;
   Eigen::VectorXd y = basis.transpose() * (start_controls - particular);
+  double gradient_scale = 0;  // max-norm of the gradient at the start
   for (int round = 0; round < 4; ++round) {
     auto* function = new WarpFunction(objective, warp, particular, basis, samples, barrier);
     ceres::GradientProblem problem(function);  // takes ownership
+    if (round == 0 && y.size() > 0) {
+      // Ceres' test is absolute (max-norm of the gradient <= gradient_tolerance) and the
+      // objective's units are whatever α, β and the clip make them: scaled here, the same
+      // tolerance asks the same progress of every objective.
+      Eigen::VectorXd gradient(y.size());
+      double cost = 0;
+      if (function->Evaluate(y.data(), &cost, gradient.data()))
+        gradient_scale = gradient.lpNorm<Eigen::Infinity>();
+    }
     ceres::GradientProblemSolver::Options solver_options;
     solver_options.line_search_direction_type = ceres::LBFGS;
     solver_options.max_num_iterations = options.max_iterations;
     solver_options.function_tolerance = options.function_tolerance;
-    solver_options.gradient_tolerance = options.gradient_tolerance;
+    solver_options.gradient_tolerance = options.gradient_tolerance * gradient_scale;
     solver_options.parameter_tolerance = 1e-14;
     solver_options.logging_type = ceres::SILENT;
     ceres::GradientProblemSolver::Summary summary;

@@ -75,6 +75,11 @@ TimeWarp TimeWarp::uniform(double source_duration, double duration, int segments
 
 WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins) {
   check_sizes(source_duration, duration, segments);
+  for (std::size_t i = 0; i < pins.size(); ++i)  // before sorting: NaN does not order
+    if (!std::isfinite(pins[i].source_time) || !std::isfinite(pins[i].output_time))
+      throw std::invalid_argument("time warp: pin " + std::to_string(i) + " (source " +
+                                  seconds(pins[i].source_time) + " at output " +
+                                  seconds(pins[i].output_time) + "): expected finite times");
   std::vector<Pin> sorted = pins;
   std::sort(sorted.begin(), sorted.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
   for (std::size_t i = 0; i < sorted.size(); ++i) {

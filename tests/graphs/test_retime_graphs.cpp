@@ -288,6 +288,30 @@ TEST_CASE(
   CHECK(increasing);
 }
 
+TEST_CASE("the report counts the frames written at the output fps, not at the hulls' 30 Hz",
+          "[graphs][retime]") {
+  TempDir dir;
+  const fs::path hop = write_hop(dir);
+  const Source source = source_at_30(hop);
+  for (const double fps : {24.0, 60.0}) {
+    const fs::path output = dir / "out.bvh", report = dir / "report.json", curves = dir / "curves.csv";
+    const Result r = run_graph(
+        kChecked, {"input=" + hop.string(), "output_fps=" + std::to_string(fps), "output=" + output.string(),
+                   "report=" + report.string(), "curves=" + curves.string()});
+    INFO(fps << " fps\n" << show(r));
+    REQUIRE(r.code == 0);
+    const kg::motion::Motion m = kg::io::read_bvh(output).motion;
+    CHECK(m.fps == Approx(fps));
+    const int written = static_cast<int>(std::floor(0.5 * source.duration * fps + 1e-9)) + 1;
+    CHECK(m.frame_count() == written);
+    CHECK(static_cast<int>(read_curves(curves).size()) == written);
+    const YAML::Node rep = YAML::LoadFile(report.string());
+    CHECK(rep["fps"].as<double>() == Approx(fps));
+    CHECK(rep["output_frames"].as<int>() == written);
+    CHECK_FALSE(rep["failed"].as<bool>());
+  }
+}
+
 TEST_CASE("graphs/retime/gravity.yaml on the rigid hop: the flight plays at ṗ² = g'/g under each gravity",
           "[graphs][retime]") {
   // Under gravity g' the hop's ballistic path (made under g) is physical again played at
@@ -503,6 +527,38 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
     nothing_written();
   }
 
+  SECTION("a pin at infinity: refused when the graph loads") {
+    const Result r =
+        run_graph(kSource / "graphs/retime/jump_pin.yaml",
+                  {"input=" + hop.string(), "pin_source=.inf", "pin_output=0.8", "output=" + output.string(),
+                   "report=" + report.string(), "curves=" + curves.string()});
+    INFO(show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err,
+               Catch::Contains("jump_pin.yaml:") &&
+                   Catch::Contains("pin 0: pin_source inf s, pin_output 0.8 s (expected finite seconds)"));
+    nothing_written();
+  }
+
+  SECTION("a knot spacing too fine for the duration: at load when the duration is given, else when it runs") {
+    Result r = run_graph(kChecked, {"input=" + hop.string(), "duration=100000", "knot_spacing=0.001",
+                                    "output=" + output.string(), "report=" + report.string()});
+    INFO(show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err, Catch::Contains("retime_checked.yaml:") &&
+                          Catch::Contains("knot_spacing 0.001 s cuts the 100000 s duration into more than "
+                                          "4096 segments (expected knot_spacing >= 24.4141 s)"));
+    nothing_written();
+    r = run_graph(kChecked, {"input=" + hop.string(), "duration_scale=1000", "knot_spacing=0.001",
+                             "output=" + output.string(), "report=" + report.string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    CHECK_THAT(failure_line(r.err), Catch::Contains("node retime (retime.retime) failed") &&
+                                        Catch::Contains("retime: knot_spacing 0.001 s cuts the ") &&
+                                        Catch::Contains("(expected at most 4096: knot_spacing >= "));
+    nothing_written();
+  }
+
   SECTION("a pin outside the output") {
     const Result r =
         run_graph(kSource / "graphs/retime/jump_pin.yaml",
@@ -531,7 +587,7 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
     CHECK_THAT(failure, Catch::Contains("node retime (retime.retime) failed") &&
                             Catch::Contains("output frames inside their hulls") &&
                             Catch::Contains("shorter than any feasible playback"));
-    nothing_written();
+    CHECK_FALSE(fs::exists(output));
     // The shortest feasible playback: no shorter than the flight at source speed plus the stands
     // at the hulls' box (ṗ² <= 16, ṗ <= 4), and no longer than the half that was feasible.
     const std::string key = "the shortest lasts ";
@@ -542,6 +598,28 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
     INFO("shortest " << shortest << " s");
     CHECK(shortest >= kHopFlight + 2 * kHopStand / 4 - 2 / kFps);
     CHECK(shortest <= 0.5 * source.duration);
+    // The report is written all the same, saying why: infeasible, the shortest feasible duration,
+    // no frame written.
+    REQUIRE(fs::exists(report));
+    const YAML::Node rep = YAML::LoadFile(report.string());
+    CHECK(rep["failed"].as<bool>());
+    CHECK_FALSE(rep["feasible"].as<bool>());
+    CHECK(rep["output_frames"].as<int>() == 0);
+    CHECK(rep["duration"].as<double>() == Approx(0.3 * source.duration).margin(1e-9));
+    REQUIRE(rep["shortest_duration"]);
+    CHECK(rep["shortest_duration"].as<double>() == Approx(shortest).margin(5e-4));
+    CHECK_THAT(rep["message"].as<std::string>(), Catch::Contains("shorter than any feasible playback"));
+  }
+
+  SECTION("strict failure writes the report but neither curves nor motion") {
+    const Result r = run_graph(
+        kChecked, {"input=" + hop.string(), "duration_scale=0.3", "strict=true", "output=" + output.string(),
+                   "report=" + report.string(), "curves=" + curves.string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    CHECK(fs::exists(report));
+    CHECK_FALSE(fs::exists(output));
+    CHECK_FALSE(fs::exists(curves));
   }
 
   SECTION(
@@ -573,7 +651,11 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
     seconds << shortest;
     CHECK_THAT(r.err, Catch::Contains("shorter than any feasible playback") &&
                           Catch::Contains("the shortest lasts " + seconds.str() + " s"));
-    nothing_written();
+    CHECK_FALSE(fs::exists(output));
+    const YAML::Node failed = YAML::LoadFile(report.string());
+    CHECK(failed["failed"].as<bool>());
+    CHECK_FALSE(failed["feasible"].as<bool>());
+    CHECK(failed["shortest_duration"].as<double>() == Approx(shortest).margin(1e-9));
   }
 
   SECTION("a body file with a massless or negative segment: file, line and what was expected") {

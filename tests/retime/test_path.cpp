@@ -75,3 +75,36 @@ TEST_CASE("smoothed path derivatives keep a parabola's second derivative and qui
   CHECK(smooth_error < 1);
   CHECK_THROWS_WITH(retime::path_derivatives(m, -1), Catch::Matchers::Contains("smoothing"));
 }
+
+TEST_CASE(
+    "smoothed path derivatives of a parabola are exact to its ends, also on clips shorter than the kernel") {
+  // 0.04 s at 120 Hz: a kernel reaching 20 frames either side, longer than the short clips.
+  const double fps = 120;
+  for (const int frames : {3, 4, 7, 25, 240}) {
+    motion::Motion m = known_curves(frames, fps);
+    for (int f = 0; f < frames; ++f) {
+      const double t = f / fps;
+      m.values(f, 0) = 2 + 1.5 * t - 4.905 * t * t;  // a flight under 9.81 m/s²
+      m.values(f, 1) = 0.3 - 2.0 * t;                // a steady turn
+    }
+    const retime::PathDerivatives d = retime::path_derivatives(m, 0.04);
+    INFO(frames << " frames");
+    for (int f = 0; f < frames; ++f) {
+      INFO("frame " << f);
+      CHECK(d.second(f, 0) == Approx(-9.81).epsilon(1e-9));
+      CHECK(d.first(f, 0) == Approx(1.5 - 9.81 * f / fps).margin(1e-9));
+      CHECK(d.first(f, 1) == Approx(-2.0).margin(1e-9));
+      CHECK(d.second(f, 1) == Approx(0.0).margin(1e-6));
+    }
+  }
+}
+
+TEST_CASE("smoothed path derivatives of a clip of two frames: their difference, no curvature") {
+  const motion::Motion two = known_curves(2, 120);
+  const retime::PathDerivatives d = retime::path_derivatives(two, 0.04);
+  for (int f = 0; f < 2; ++f) {
+    CHECK(d.first(f, 0) == Approx((two.values(1, 0) - two.values(0, 0)) * 120));
+    CHECK(d.first(f, 1) == Approx(3.0).margin(1e-9));
+  }
+  CHECK(d.second.isZero());
+}

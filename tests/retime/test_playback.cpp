@@ -48,3 +48,16 @@ TEST_CASE("a warp for another clip's duration is refused; curves are written per
   retime::write_warp_json(json, warp, 10);
   CHECK_THAT(json.str(), Catch::Matchers::Contains("\"pdot\":[2"));
 }
+
+TEST_CASE("output_frame_count is the frames written at the output rate, and refuses counts beyond reach") {
+  const retime::TimeWarp warp = retime::TimeWarp::uniform(2.0, 1.0, 10);
+  CHECK(retime::output_frame_count(warp, 30) == 31);
+  CHECK(retime::output_frame_count(warp, 24) == 25);
+  CHECK(retime::output_frame_count(warp, 7.5) == 8);
+  CHECK(retime::retimed_motion(ramp(61, 30), warp, 24).frame_count() == retime::output_frame_count(warp, 24));
+  CHECK_THROWS_WITH(retime::output_frame_count(warp, 0),
+                    Catch::Matchers::Contains("retimed playback: fps 0 (expected > 0)"));
+  const retime::TimeWarp long_warp = retime::TimeWarp::uniform(2.0, 1e4, 10);
+  CHECK_THROWS_WITH(retime::output_frame_count(long_warp, 1e5),
+                    "retimed playback: 10000 s at fps 100000 is 1e+09 frames (expected at most 10000000)");
+}

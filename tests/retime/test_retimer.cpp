@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <limits>
+#include <string>
 
 #include "kg/retime/retimer.hpp"
 
@@ -32,6 +34,22 @@ class SpeedObjective final : public PathObjective {
 
  private:
   double stiff_;
+};
+
+// `inner` times `scale`: the same minimum in other units.
+class ScaledObjective final : public PathObjective {
+ public:
+  ScaledObjective(const PathObjective& inner, double scale) : inner_(inner), scale_(scale) {}
+  SampleCost evaluate(double p, double pddot, double pdot2, int& hint) const override {
+    const SampleCost c = inner_.evaluate(p, pddot, pdot2, hint);
+    return {scale_ * c.value, scale_ * c.d_p, scale_ * c.d_pddot, scale_ * c.d_pdot2};
+  }
+  double source_duration() const override { return inner_.source_duration(); }
+  double source_fps() const override { return inner_.source_fps(); }
+
+ private:
+  const PathObjective& inner_;
+  double scale_;
 };
 
 }  // namespace
@@ -76,4 +94,64 @@ TEST_CASE("pins hold exactly after the solve") {
   CHECK(r.converged);
   CHECK(r.warp.at(1.0) == Approx(1.5).epsilon(1e-9));
   CHECK(r.warp.at(2.5) == Approx(3.0).epsilon(1e-9));
+}
+
+TEST_CASE("the gradient tolerance is relative: objectives in small and large units both solve to it") {
+  // Ceres' gradient test is absolute; were the option passed through, the objective a million
+  // times smaller would start below it and stop where it started, the one a thousand times
+  // larger would never reach it.
+  const SpeedObjective unit(200);
+  const RetimeOptions options{.duration = 2.0, .function_tolerance = 0, .gradient_tolerance = 1e-2};
+  const ScaledObjective large_units(unit, 1e3), small_units(unit, 1e-6);
+  const RetimeResult large = retime(large_units, options);
+  const RetimeResult small = retime(small_units, options);
+  INFO(large.message << "\n" << small.message);
+  CHECK(large.converged);
+  CHECK(small.converged);
+  CHECK_THAT(large.message, Catch::Matchers::StartsWith("Gradient tolerance reached"));
+  CHECK_THAT(small.message, Catch::Matchers::StartsWith("Gradient tolerance reached"));
+  const TimeWarp uniform = TimeWarp::uniform(3.0, 2.0, 20);
+  const double start = integrate(unit, uniform, grid_samples(uniform, 30, 4));
+  const double solved = large.objective / 1e3;
+  CHECK(solved < 0.5 * start);
+  CHECK(small.objective / 1e-6 == Approx(solved).epsilon(0.02));
+}
+
+TEST_CASE("retime refuses options out of range, naming the option and the range expected") {
+  const SpeedObjective objective(20);
+  const double nan = std::numeric_limits<double>::quiet_NaN(), inf = std::numeric_limits<double>::infinity();
+  struct Bad {
+    RetimeOptions options;
+    std::string message;
+  };
+  const std::vector<Bad> bad{
+      {{.duration = 0}, "retime: duration 0 s (expected a finite number > 0)"},
+      {{.duration = -2}, "retime: duration -2 s (expected a finite number > 0)"},
+      {{.duration = nan}, "retime: duration nan s (expected a finite number > 0)"},
+      {{.duration = inf}, "retime: duration inf s (expected a finite number > 0)"},
+      {{.duration = 2, .knot_spacing = 0}, "retime: knot_spacing 0 s (expected a finite number > 0)"},
+      {{.duration = 2, .knot_spacing = nan}, "retime: knot_spacing nan s (expected a finite number > 0)"},
+      {{.duration = 2, .knot_spacing = 1e-300},
+       "retime: knot_spacing 1e-300 s cuts the 2 s output into 2e+300 segments (expected at most 4096: "
+       "knot_spacing >= 0.000488281 s)"},
+      {{.duration = 2, .knot_spacing = 2.0 / 4097}, "into 4097 segments (expected at most 4096"},
+      {{.duration = 1e6}, "into 1e+07 segments (expected at most 4096: knot_spacing >= 244.141 s)"},
+      {{.duration = 2, .samples_per_frame = 0}, "retime: samples_per_frame 0 (expected 1 to 1000)"},
+      {{.duration = 2, .max_iterations = 0}, "retime: max_iterations 0 (expected >= 1)"},
+      {{.duration = 2, .max_iterations = -5}, "retime: max_iterations -5 (expected >= 1)"},
+      {{.duration = 2, .function_tolerance = -1},
+       "retime: function_tolerance -1 (expected a finite number >= 0)"},
+      {{.duration = 2, .gradient_tolerance = nan},
+       "retime: gradient_tolerance nan (expected a finite number >= 0)"},
+      {{.duration = 2, .pins = {{.source_time = nan, .output_time = 1}}},
+       "time warp: pin 0 (source nan s at output 1 s): expected finite times"},
+      {{.duration = 2,
+        .pins = {{.source_time = 1, .output_time = 0.5}, {.source_time = 2, .output_time = nan}}},
+       "time warp: pin 1 (source 2 s at output nan s): expected finite times"},
+  };
+  for (const Bad& b : bad) {
+    INFO(b.message);
+    CHECK_THROWS_AS(retime(objective, b.options), std::invalid_argument);
+    CHECK_THROWS_WITH(retime(objective, b.options), Catch::Matchers::Contains(b.message));
+  }
 }

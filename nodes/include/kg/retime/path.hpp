@@ -23,9 +23,12 @@ struct PathDerivatives {
 // `smoothing` (seconds, >= 0) is the standard deviation of a Gaussian the channels are smoothed
 // with before differencing. Capture noise of a millimetre becomes metres per second² at 120 Hz,
 // which no contact force explains; a Gaussian keeps a parabola's second derivative exactly (a
-// ballistic flight stays ballistic) and only shifts its value by a constant. The ends are
-// extended by odd reflection, so a straight line stays straight to the last frame. The derivatives
-// only are smoothed: the clip itself is played unchanged.
+// ballistic flight stays ballistic) and only shifts its value by a constant. Past each end the
+// clip continues as the least-squares parabola through the frames within the kernel's reach (4
+// standard deviations) of that end, so a parabola keeps its second derivative exactly to the
+// last frame, and a clip shorter than the kernel (3 frames at 120 Hz under 0.04 s) is smoothed
+// toward its own best parabola (two frames: their line) without reading past its ends. The
+// derivatives only are smoothed: the clip itself is played unchanged.
 //
 // Throws std::invalid_argument when motion.check() fails or smoothing is negative or not finite.
 PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing = 0);

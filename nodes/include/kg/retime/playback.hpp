@@ -12,10 +12,16 @@
 
 namespace kg::retime {
 
+// The frames a playback of `warp` at `fps` has: floor(warp.duration * fps + 1e-9) + 1. Throws
+// std::invalid_argument for fps <= 0 or not finite, or more than kMaxOutputFrames frames.
+inline constexpr int kMaxOutputFrames = 10'000'000;
+int output_frame_count(const TimeWarp& warp, double fps);
+
 // Output frames at times k / fps, k = 0 .. floor(warp.duration * fps + 1e-9) (the last frame is
 // the source's last pose when the duration is a whole number of frames); frame k is the source
 // pose at p(k / fps) (positions linear, rotations slerped and continuous with the previous
-// frame). Keeps the skeleton; the name gains nothing. Throws std::invalid_argument for fps <= 0,
+// frame). Keeps the skeleton; the name gains nothing. Throws std::invalid_argument for fps <= 0
+// (or too many frames, output_frame_count),
 // a motion failing check(), or a warp whose source duration differs from the clip's by more
 // than half a frame.
 motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps);

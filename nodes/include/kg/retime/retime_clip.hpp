@@ -61,6 +61,8 @@ struct ClipRetime {
   // inside_tolerance of the point.
   double share_inside = 0;
   double share_at_point = 1;
+  // The output frames at the source's rate the shares count (the clip written at another rate
+  // has output_frame_count(warp, fps) frames, playback.hpp).
   int output_frames = 0;
   // Every output frame playing a frame with a feasible polytope lies inside its hull. Frames
   // without one (flight, not exactly physical) are reported by share_at_point, not counted here:

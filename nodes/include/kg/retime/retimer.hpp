@@ -40,14 +40,27 @@ class PathObjective {
   virtual double source_fps() const = 0;       // frames per second of the source
 };
 
+// The solve holds two dense square matrices of the controls' count (the constraints' null-space
+// basis): at most this many segments (2 x 134 MB), i.e. knot_spacing >= duration / kMaxSegments.
+inline constexpr int kMaxSegments = 4096;
+inline constexpr int kMaxSamplesPerFrame = 1000;
+
 struct RetimeOptions {
-  double duration = 0;              // output seconds (> 0)
-  std::vector<Pin> pins{};          // source moments at output times
-  double knot_spacing = 0.1;        // output seconds between the spline's controls (> 0)
-  int samples_per_frame = 4;        // at least this many samples per source frame (>= 1)
-  int max_iterations = 500;         // L-BFGS iterations per grid
-  double function_tolerance = 1e-10;  // relative change of the objective that ends a solve
-  double gradient_tolerance = 1e-10;  // relative to the initial gradient
+  double duration = 0;        // output seconds (finite, > 0)
+  std::vector<Pin> pins{};    // source moments at output times (finite; warp_constraints)
+  double knot_spacing = 0.1;  // output seconds between the spline's controls (> 0, at most
+                              // kMaxSegments segments over the duration)
+  int samples_per_frame = 4;  // at least this many samples per source frame (1 .. kMaxSamplesPerFrame)
+  int max_iterations = 500;   // L-BFGS iterations per grid (>= 1)
+  // Both tolerances are relative (finite, >= 0). A solve ends when an iteration changes the
+  // objective by less than function_tolerance times its value (Ceres' own test), or when the
+  // gradient's max-norm falls to gradient_tolerance times its max-norm at the start. Ceres tests
+  // the gradient absolutely (max-norm <= its gradient_tolerance); retime() passes it this option
+  // times the starting max-norm, because the objective's units (α, β, the clip's torques and
+  // duration) vary by orders of magnitude and an absolute threshold would stop a small objective
+  // before it moved and never stop a large one.
+  double function_tolerance = 1e-10;
+  double gradient_tolerance = 1e-10;
 };
 
 struct RetimeResult {
@@ -61,8 +74,9 @@ struct RetimeResult {
   std::string message;     // Ceres' termination message, and any grid refinement
 };
 
-// Throws std::invalid_argument for options out of range or pins the warp cannot meet
-// (warp_constraints, initial_warp).
+// Throws std::invalid_argument naming the option for options out of range (a duration that is
+// not a finite positive number, a knot spacing giving more than kMaxSegments segments,
+// max_iterations < 1, ...), or pins the warp cannot meet (warp_constraints, initial_warp).
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options);
 
 // The integral of `objective` along `warp` on the grid retime() would use, with its gradient with

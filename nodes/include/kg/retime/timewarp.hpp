@@ -62,9 +62,10 @@ struct WarpConstraints {
   Eigen::VectorXd b;  // source seconds
 };
 
-// Throws std::invalid_argument naming the pin when a pin lies outside the open (0, duration) x (0,
-// source_duration) (the ends are kept already), two pins share an output time, or pins run
-// backwards (a later output time playing an earlier source moment: no increasing p(t) meets them).
+// Throws std::invalid_argument naming the pin when a pin's times are not finite, it lies outside
+// the open (0, duration) x (0, source_duration) (the ends are kept already), two pins share an
+// output time, or pins run backwards (a later output time playing an earlier source moment: no
+// increasing p(t) meets them).
 WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
 
 // A strictly increasing warp meeting the constraints: piecewise-constant speed between the ends
