@@ -91,6 +91,9 @@ class BakedObjective final : public PathObjective {
   double flight_excess(int frame, double pddot, double pdot_squared) const {
     return kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared);
   }
+  // The flight term's quadratic of a frame ((|r|² − least |r|²) / W², before α; all zero off
+  // flight) and the torque term's quadratic of one fan sector (β |τ − τ'|² / τ_scale²).
+  const Quadratic& flight_quadratic(int frame) const { return flight_[static_cast<std::size_t>(frame)]; }
   const Quadratic& quadratic(int frame, int sector) const {
     return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
   }
