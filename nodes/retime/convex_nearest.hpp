@@ -14,6 +14,8 @@
 #include "kg/retime/force_model.hpp"
 
 namespace kg::retime::detail {
+// Internal linkage: each user's copy is called directly or inlined, never through the library's PLT.
+namespace {
 
 inline double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 
@@ -88,4 +90,5 @@ inline HullPoint nearest_from_edge(const Eigen::Vector2d* v, int n, const Eigen:
   return nearest_on_polygon(v, static_cast<std::size_t>(n), x);
 }
 
+}  // namespace
 }  // namespace kg::retime::detail

@@ -10,13 +10,9 @@
 
 #include "kg/retime/force_model.hpp"
 
+#include "convex_nearest.hpp"
+
 namespace kg::retime {
-
-namespace {
-
-double cross(const Eigen::Vector2d& u, const Eigen::Vector2d& v) { return u.x() * v.y() - u.y() * v.x(); }
-
-}  // namespace
 
 Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, const Eigen::VectorXd& tb,
                          const Eigen::VectorXd& target, double weight) {
@@ -70,7 +66,7 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
   if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.torque_scale > 0))
     throw std::invalid_argument("retiming objective: alpha and beta must be >= 0 and the torque scale > 0");
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
-  quadratics_.resize(frames);
+  frames_.resize(frames);
   flight_.assign(frames, Quadratic{});
   flight_least_.assign(frames, 0.0);
   std::vector<int> root_rows;
@@ -98,60 +94,124 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
       q[5] -= flight_least_[f];  // 0 at the closest point
       flight_[f] = q;
     }
-    quadratics_[f].reserve(hull.sectors.size());
+    if (hull.sectors.empty())
+      throw std::invalid_argument("retiming objective: frame " + std::to_string(f) + " has no fan");
+    const int n = static_cast<int>(hull.vertices.size());
+    FrameData& frame = frames_[f];
+    frame.centre_x = hull.centre.x();
+    frame.centre_y = hull.centre.y();
+    frame.first_sector = static_cast<int>(sectors_.size());
+    frame.sector_count = static_cast<int>(hull.sectors.size());
+    frame.first_vertex = static_cast<int>(vertices_.size());
+    frame.vertex_count = n;
+    frame.flight = hull.status == HullStatus::Flight;
+    vertices_.insert(vertices_.end(), hull.vertices.begin(), hull.vertices.end());
     for (std::size_t s = 0; s < hull.sectors.size(); ++s) {
+      const FanSector& fan = hull.sectors[s];
+      SectorData d{};
+      d.from_x = fan.from.x();
+      d.from_y = fan.from.y();
+      d.to_x = fan.to.x();
+      d.to_y = fan.to.y();
       // Without contact forces every sector has the same τ: bake it once.
       if (s > 0 && hull.N.cols() == 0) {
-        quadratics_[f].push_back(quadratics_[f].front());
-        continue;
+        d.q = sectors_[static_cast<std::size_t>(frame.first_sector)].q;
+      } else {
+        sector_torques(hull, static_cast<int>(s), torques[f], hulls.gravity, t);
+        d.q = bake_quadratic(t.t0, t.pddot, t.pdot2, targets[f], w);
       }
-      sector_torques(hull, static_cast<int>(s), torques[f], hulls.gravity, t);
-      quadratics_[f].push_back(bake_quadratic(t.t0, t.pddot, t.pdot2, targets[f], w));
+      d.edge = std::clamp(fan.edge, 0, n - 1);
+      d.triangle = fan.in_hull && n >= 3;
+      if (d.triangle) {
+        const Eigen::Vector2d& u = hull.vertices[static_cast<std::size_t>(d.edge)];
+        const Eigen::Vector2d e = hull.vertices[static_cast<std::size_t>((d.edge + 1) % n)] - u;
+        d.edge_x = u.x();
+        d.edge_y = u.y();
+        d.along_x = e.x();
+        d.along_y = e.y();
+      }
+      sectors_.push_back(d);
     }
+    frame.uniform = std::all_of(
+        sectors_.begin() + frame.first_sector, sectors_.end(),
+        [&](const SectorData& d) { return d.q == sectors_[static_cast<std::size_t>(frame.first_sector)].q; });
   }
-}
-
-BakedObjective::FrameCost BakedObjective::frame_cost(int frame, double a, double b, int& hint) const {
-  const FrameHull& hull = hulls_.frames[static_cast<std::size_t>(frame)];
-  const Eigen::Vector2d x(a, b);
-  hint = find_sector(hull, x, hint);
-  const Quadratic& q = quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(hint)];
-  FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4], 2 * q[0] * b + q[2] * a + q[3]};
-  if (hull.status == HullStatus::Flight) {
-    const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
-    const double alpha = weights_.alpha;
-    cost.value += alpha * kg::retime::evaluate(r, a, b);
-    cost.d_a += alpha * (2 * r[1] * a + r[2] * b + r[4]);
-    cost.d_b += alpha * (2 * r[0] * b + r[2] * a + r[3]);
-    return cost;
-  }
-  // Inside the sector's fan triangle is inside the hull: no nearest point to find.
-  const FanSector& s = hull.sectors[static_cast<std::size_t>(hint)];
-  const int n = static_cast<int>(hull.vertices.size());
-  if (s.in_hull && n >= 3) {
-    const Eigen::Vector2d& u = hull.vertices[static_cast<std::size_t>(s.edge)];
-    const Eigen::Vector2d& v = hull.vertices[static_cast<std::size_t>((s.edge + 1) % n)];
-    if (cross(v - u, x - u) >= 0) return cost;
-  }
-  int probe = hint;
-  const HullPoint c = closest_point(hull, x, probe);
-  if (c.inside) return cost;
-  const Eigen::Vector2d gap = x - c.point;
-  cost.value += weights_.alpha * gap.squaredNorm();
-  cost.d_a += 2 * weights_.alpha * gap.x();
-  cost.d_b += 2 * weights_.alpha * gap.y();
-  return cost;
 }
 
 SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared, int& hint) const {
-  const int last = static_cast<int>(quadratics_.size()) - 1;
+  // One frame's integrand at (a, b) = (p̈, ṗ²); `sector`: the search's start, set to a's sector.
+  // A lambda forced inline, not a member (a member of a shared library is called through its
+  // PLT): both frames' work then interleaves, each with its own branch sites.
+  struct FrameCost {
+    double value, d_a, d_b;
+  };
+  auto frame_cost = [this](int frame, double a, double b, int& sector) __attribute__((always_inline)) {
+    const FrameData& fr = frames_[static_cast<std::size_t>(frame)];
+    const SectorData* sectors = sectors_.data() + fr.first_sector;
+    const int n = fr.sector_count;
+    int k = sector >= 0 && sector < n ? sector : 0;
+    // find_sector's search on the baked copy (the same tests in the same order, so the same sector;
+    // the hint's sector first, as it nearly always holds the sample). Unneeded when every sector
+    // has the same τ and the hull term does not depend on it (flight).
+    const double dx = a - fr.centre_x, dy = b - fr.centre_y;
+    auto holds = [&](const SectorData& s) {
+      return s.from_x * dy - s.from_y * dx >= 0 && dx * s.to_y - dy * s.to_x >= 0;
+    };
+    if (!(fr.uniform && fr.flight) && !(dx == 0 && dy == 0) && !holds(sectors[k])) {
+      const bool back = sectors[k].from_x * dy - sectors[k].from_y * dx < 0;
+      int i = 1;
+      for (; i < n; ++i) {
+        k = back ? (k == 0 ? n - 1 : k - 1) : (k + 1 == n ? 0 : k + 1);
+        if (holds(sectors[k])) break;
+      }
+      // Rounding on a ray: find_sector's choice of the sector the point is nearest to being inside.
+      if (i == n) k = find_sector(hulls_.frames[static_cast<std::size_t>(frame)], Eigen::Vector2d(a, b), k);
+    }
+    sector = k;
+    const SectorData& s = sectors[k];
+    const Quadratic& q = s.q;
+    FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4],
+                   2 * q[0] * b + q[2] * a + q[3]};
+    const double alpha = weights_.alpha;
+    if (fr.flight) {
+      const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
+      cost.value += alpha * kg::retime::evaluate(r, a, b);
+      cost.d_a += alpha * (2 * r[1] * a + r[2] * b + r[4]);
+      cost.d_b += alpha * (2 * r[0] * b + r[2] * a + r[3]);
+      return cost;
+    }
+    // Inside the sector's fan triangle is inside the hull: no nearest point to find.
+    if (s.triangle && s.along_x * (b - s.edge_y) - s.along_y * (a - s.edge_x) >= 0) return cost;
+    const Eigen::Vector2d x(a, b);
+    const Eigen::Vector2d* v = vertices_.data() + fr.first_vertex;
+    const HullPoint c = fr.vertex_count >= 3
+                            ? detail::nearest_from_edge(v, fr.vertex_count, x, s.edge)
+                            : detail::nearest_on_polygon(v, static_cast<std::size_t>(fr.vertex_count), x);
+    if (c.inside) return cost;
+    const Eigen::Vector2d gap = x - c.point;
+    cost.value += alpha * gap.squaredNorm();
+    cost.d_a += 2 * alpha * gap.x();
+    cost.d_b += 2 * alpha * gap.y();
+    return cost;
+  };
+  const int last = static_cast<int>(frames_.size()) - 1;
   const double x = std::clamp(p * fps_, 0.0, static_cast<double>(last));
   const int f = std::min(static_cast<int>(x), last - 1);
   const double u = x - f;
-  int sector = hint;
-  const FrameCost c0 = frame_cost(f, pddot, pdot_squared, sector);
-  hint = sector;
-  const FrameCost c1 = frame_cost(f + 1, pddot, pdot_squared, sector);
+  // The hint packs the sectors of frames `tag` and `tag` + 1 (10 bits each; the tag is the frame
+  // index's low 11 bits): the same pair starts both searches where they ended, the next pair
+  // starts frame f from what was frame f + 1.
+  const auto h = static_cast<unsigned>(hint);
+  const unsigned tag = (h >> 20) & 0x7ffu, mine = static_cast<unsigned>(f) & 0x7ffu;
+  int s0 = static_cast<int>(h & 0x3ffu), s1 = static_cast<int>((h >> 10) & 0x3ffu);
+  if (tag != mine) {
+    s0 = tag == ((mine - 1) & 0x7ffu) ? s1 : s0;
+    s1 = s0;
+  }
+  const FrameCost c0 = frame_cost(f, pddot, pdot_squared, s0);
+  const FrameCost c1 = frame_cost(f + 1, pddot, pdot_squared, s1);
+  hint = static_cast<int>((static_cast<unsigned>(s0) & 0x3ffu) | (static_cast<unsigned>(s1) & 0x3ffu) << 10 |
+                          mine << 20);
   return {.value = (1 - u) * c0.value + u * c1.value,
           .d_p = (c1.value - c0.value) * fps_,
           .d_pddot = (1 - u) * c0.d_a + u * c1.d_a,

@@ -69,8 +69,11 @@ class BakedObjective final : public PathObjective {
   BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques, std::span<const Eigen::VectorXd> targets,
                  const motion::Skeleton& skeleton, double source_fps, const ObjectiveWeights& weights);
 
+  // `hint`: the caller's cursor (start it at 0, pass it back; any value is accepted and gives the
+  // same cost up to rounding): it holds the fan sectors of the last two frames met, so that
+  // successive samples start their sector searches where the last ones ended.
   SampleCost evaluate(double p, double pddot, double pdot_squared, int& hint) const override;
-  double source_duration() const override { return (static_cast<double>(quadratics_.size()) - 1) / fps_; }
+  double source_duration() const override { return (static_cast<double>(frames_.size()) - 1) / fps_; }
   double source_fps() const override { return fps_; }
 
   // The two parts of one frame's integrand at (p̈, ṗ²), and whether the point lies in its hull
@@ -95,21 +98,38 @@ class BakedObjective final : public PathObjective {
   // flight) and the torque term's quadratic of one fan sector (β |τ − τ'|² / τ_scale²).
   const Quadratic& flight_quadratic(int frame) const { return flight_[static_cast<std::size_t>(frame)]; }
   const Quadratic& quadratic(int frame, int sector) const {
-    return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
+    const int first = frames_[static_cast<std::size_t>(frame)].first_sector;
+    return sectors_[static_cast<std::size_t>(first + sector)].q;
   }
 
  private:
-  struct FrameCost {
-    double value, d_a, d_b;
+  // What evaluate reads, per frame and per sector in contiguous arrays (a sample touches one
+  // frame record, one sector record and, outside the hull, a few vertices of each of its two
+  // frames), copied from the hulls at baking.
+  struct FrameData {
+    double centre_x = 0, centre_y = 0;  // the fan's centre (plane units)
+    int first_sector = 0, sector_count = 0;
+    int first_vertex = 0, vertex_count = 0;
+    bool flight = false;
+    bool uniform = false;  // every sector has the same quadratic (no contact column): no search needed for τ
   };
-  FrameCost frame_cost(int frame, double a, double b, int& hint) const;
+  struct alignas(64) SectorData {
+    double from_x, from_y, to_x, to_y;  // the wedge (FanSector::from, to)
+    Quadratic q;                        // its torque term
+    double edge_x, edge_y;              // the hull edge it faces: first vertex and edge vector,
+    double along_x, along_y;            // for the fan triangle's outer side
+    int edge;                           // that edge (vertex edge -> edge + 1)
+    bool triangle;                      // a fan triangle of the hull (in_hull and >= 3 vertices)
+  };
 
   const Hulls& hulls_;
   double fps_;
   ObjectiveWeights weights_;
-  std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
-  std::vector<Quadratic> flight_;                   // per frame: |r|² / W² − its least (zero off flight)
-  std::vector<double> flight_least_;                // per frame: |r|² / W² at the least-squares point
+  std::vector<FrameData> frames_;
+  std::vector<SectorData> sectors_;        // every frame's fan sectors, frame after frame
+  std::vector<Eigen::Vector2d> vertices_;  // every frame's hull vertices, frame after frame
+  std::vector<Quadratic> flight_;          // per frame: |r|² / W² − its least (zero off flight)
+  std::vector<double> flight_least_;       // per frame: |r|² / W² at the least-squares point
 };
 
 }  // namespace kg::retime
