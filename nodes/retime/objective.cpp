@@ -67,6 +67,7 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
     throw std::invalid_argument("retiming objective: alpha and beta must be >= 0 and the torque scale > 0");
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
   frames_.resize(frames);
+  last_frame_ = static_cast<int>(frames) - 1;
   flight_.assign(frames, Quadratic{});
   flight_least_.assign(frames, 0.0);
   std::vector<int> root_rows;
@@ -132,9 +133,11 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
       }
       sectors_.push_back(d);
     }
-    frame.uniform = std::all_of(
-        sectors_.begin() + frame.first_sector, sectors_.end(),
-        [&](const SectorData& d) { return d.q == sectors_[static_cast<std::size_t>(frame.first_sector)].q; });
+    frame.search =
+        !frame.flight ||
+        !std::all_of(sectors_.begin() + frame.first_sector, sectors_.end(), [&](const SectorData& d) {
+          return d.q == sectors_[static_cast<std::size_t>(frame.first_sector)].q;
+        });
   }
 }
 
@@ -151,13 +154,13 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     const int n = fr.sector_count;
     int k = sector >= 0 && sector < n ? sector : 0;
     // find_sector's search on the baked copy (the same tests in the same order, so the same sector;
-    // the hint's sector first, as it nearly always holds the sample). Unneeded when every sector
-    // has the same τ and the hull term does not depend on it (flight).
+    // the hint's sector first, as it nearly always holds the sample; at the centre every sector
+    // holds it, and find_sector returns the hint's).
     const double dx = a - fr.centre_x, dy = b - fr.centre_y;
     auto holds = [&](const SectorData& s) {
       return s.from_x * dy - s.from_y * dx >= 0 && dx * s.to_y - dy * s.to_x >= 0;
     };
-    if (!(fr.uniform && fr.flight) && !(dx == 0 && dy == 0) && !holds(sectors[k])) {
+    if (fr.search && !holds(sectors[k])) {
       const bool back = sectors[k].from_x * dy - sectors[k].from_y * dx < 0;
       int i = 1;
       for (; i < n; ++i) {
@@ -194,7 +197,7 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     cost.d_b += 2 * alpha * gap.y();
     return cost;
   };
-  const int last = static_cast<int>(frames_.size()) - 1;
+  const int last = last_frame_;
   const double x = std::clamp(p * fps_, 0.0, static_cast<double>(last));
   const int f = std::min(static_cast<int>(x), last - 1);
   const double u = x - f;

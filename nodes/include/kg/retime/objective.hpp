@@ -111,7 +111,8 @@ class BakedObjective final : public PathObjective {
     int first_sector = 0, sector_count = 0;
     int first_vertex = 0, vertex_count = 0;
     bool flight = false;
-    bool uniform = false;  // every sector has the same quadratic (no contact column): no search needed for τ
+    bool search = true;  // false: a flight frame whose sectors all have the same quadratic (no
+                         // contact column), so that neither term depends on the sector
   };
   struct alignas(64) SectorData {
     double from_x, from_y, to_x, to_y;  // the wedge (FanSector::from, to)
@@ -125,6 +126,7 @@ class BakedObjective final : public PathObjective {
   const Hulls& hulls_;
   double fps_;
   ObjectiveWeights weights_;
+  int last_frame_ = 0;
   std::vector<FrameData> frames_;
   std::vector<SectorData> sectors_;        // every frame's fan sectors, frame after frame
   std::vector<Eigen::Vector2d> vertices_;  // every frame's hull vertices, frame after frame
