@@ -14,6 +14,17 @@
 
 namespace kg::retime {
 
+namespace {
+
+// The hull's point nearest to x, walking from `edge` (out of line: evaluate's path for points
+// inside their fan triangle stays short).
+[[gnu::noinline]] HullPoint nearest(const Eigen::Vector2d* v, int n, const Eigen::Vector2d& x, int edge) {
+  return n >= 3 ? detail::nearest_from_edge(v, n, x, edge)
+                : detail::nearest_on_polygon(v, static_cast<std::size_t>(n), x);
+}
+
+}  // namespace
+
 Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, const Eigen::VectorXd& tb,
                          const Eigen::VectorXd& target, double weight) {
   const Eigen::VectorXd r = t0 - target;
@@ -186,10 +197,7 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     // Inside the sector's fan triangle is inside the hull: no nearest point to find.
     if (s.triangle && s.along_x * (b - s.edge_y) - s.along_y * (a - s.edge_x) >= 0) return cost;
     const Eigen::Vector2d x(a, b);
-    const Eigen::Vector2d* v = vertices_.data() + fr.first_vertex;
-    const HullPoint c = fr.vertex_count >= 3
-                            ? detail::nearest_from_edge(v, fr.vertex_count, x, s.edge)
-                            : detail::nearest_on_polygon(v, static_cast<std::size_t>(fr.vertex_count), x);
+    const HullPoint c = nearest(vertices_.data() + fr.first_vertex, fr.vertex_count, x, s.edge);
     if (c.inside) return cost;
     const Eigen::Vector2d gap = x - c.point;
     cost.value += alpha * gap.squaredNorm();
