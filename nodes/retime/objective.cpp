@@ -134,21 +134,27 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
       }
       d.edge = std::clamp(fan.edge, 0, n - 1);
       d.triangle = fan.in_hull && n >= 3;
-      if (d.triangle) {
-        const Eigen::Vector2d& u = hull.vertices[static_cast<std::size_t>(d.edge)];
-        const Eigen::Vector2d e = hull.vertices[static_cast<std::size_t>((d.edge + 1) % n)] - u;
-        d.edge_x = u.x();
-        d.edge_y = u.y();
+      d.length_squared = -1;
+      if (n >= 3) {
+        const auto at = [&](int i) -> const Eigen::Vector2d& {
+          return hull.vertices[static_cast<std::size_t>((i + n) % n)];
+        };
+        const Eigen::Vector2d e = at(d.edge + 1) - at(d.edge), before = at(d.edge) - at(d.edge - 1),
+                              after = at(d.edge + 2) - at(d.edge + 1);
+        d.edge_x = at(d.edge).x();
+        d.edge_y = at(d.edge).y();
         d.along_x = e.x();
         d.along_y = e.y();
+        if (e.squaredNorm() > 0) d.length_squared = e.squaredNorm();
+        d.before_x = before.x();
+        d.before_y = before.y();
+        d.end_x = at(d.edge + 1).x();
+        d.end_y = at(d.edge + 1).y();
+        d.after_x = after.x();
+        d.after_y = after.y();
       }
       sectors_.push_back(d);
     }
-    frame.search =
-        !frame.flight ||
-        !std::all_of(sectors_.begin() + frame.first_sector, sectors_.end(), [&](const SectorData& d) {
-          return d.q == sectors_[static_cast<std::size_t>(frame.first_sector)].q;
-        });
   }
 }
 
@@ -171,7 +177,7 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     auto holds = [&](const SectorData& s) {
       return s.from_x * dy - s.from_y * dx >= 0 && dx * s.to_y - dy * s.to_x >= 0;
     };
-    if (fr.search && !holds(sectors[k])) {
+    if (!holds(sectors[k])) [[unlikely]] {
       const bool back = sectors[k].from_x * dy - sectors[k].from_y * dx < 0;
       int i = 1;
       for (; i < n; ++i) {
@@ -183,26 +189,51 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     }
     sector = k;
     const SectorData& s = sectors[k];
+    // kg::retime::evaluate and its partial derivatives, sharing products ((2 q1) a = 2 (q1 a)
+    // exactly, so the results are the same).
     const Quadratic& q = s.q;
-    FrameCost cost{kg::retime::evaluate(q, a, b), 2 * q[1] * a + q[2] * b + q[4],
-                   2 * q[0] * b + q[2] * a + q[3]};
+    const double qb = q[0] * b, qa = q[1] * a, qab = q[2] * a;
+    FrameCost cost{qb * b + qa * a + qab * b + q[3] * b + q[4] * a + q[5], qa + qa + q[2] * b + q[4],
+                   qb + qb + qab + q[3]};
+    // Inside the sector's fan triangle is inside the hull: no nearest point to find.
+    const double rx = a - s.edge_x, ry = b - s.edge_y;
+    const double side = s.along_x * ry - s.along_y * rx;
+    if (s.triangle && side >= 0) return cost;
     const double alpha = weights_.alpha;
-    if (fr.flight) {
+    if (fr.flight) [[unlikely]] {
       const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
       cost.value += alpha * kg::retime::evaluate(r, a, b);
       cost.d_a += alpha * (2 * r[1] * a + r[2] * b + r[4]);
       cost.d_b += alpha * (2 * r[0] * b + r[2] * a + r[3]);
       return cost;
     }
-    // Inside the sector's fan triangle is inside the hull: no nearest point to find.
-    if (s.triangle && s.along_x * (b - s.edge_y) - s.along_y * (a - s.edge_x) >= 0) return cost;
-    const Eigen::Vector2d x(a, b);
-    const HullPoint c = nearest(vertices_.data() + fr.first_vertex, fr.vertex_count, x, s.edge);
-    if (c.inside) return cost;
-    const Eigen::Vector2d gap = x - c.point;
-    cost.value += alpha * gap.squaredNorm();
-    cost.d_a += 2 * alpha * gap.x();
-    cost.d_b += 2 * alpha * gap.y();
+    // The nearest point: nearest_from_edge's first step on the facing edge (the same arithmetic),
+    // which nearly always concludes (the foot on the edge, or one of its ends), else the walk.
+    double gap_x = 0, gap_y = 0;
+    bool found = false;
+    if (s.length_squared > 0) {
+      const double along = rx * s.along_x + ry * s.along_y;
+      if (along < 0) {
+        found = rx * s.before_x + ry * s.before_y >= 0;
+        gap_x = rx, gap_y = ry;
+      } else if (along > s.length_squared) {
+        gap_x = a - s.end_x, gap_y = b - s.end_y;
+        found = gap_x * s.after_x + gap_y * s.after_y <= 0;
+      } else if (side <= 0) {
+        found = true;
+        const double t = along / s.length_squared;
+        gap_x = a - (s.edge_x + t * s.along_x), gap_y = b - (s.edge_y + t * s.along_y);
+      }
+    }
+    if (!found) {
+      const Eigen::Vector2d x(a, b);
+      const HullPoint c = nearest(vertices_.data() + fr.first_vertex, fr.vertex_count, x, s.edge);
+      if (c.inside) return cost;
+      gap_x = a - c.point.x(), gap_y = b - c.point.y();
+    }
+    cost.value += alpha * (gap_x * gap_x + gap_y * gap_y);
+    cost.d_a += 2 * alpha * gap_x;
+    cost.d_b += 2 * alpha * gap_y;
     return cost;
   };
   const int last = last_frame_;

@@ -104,23 +104,27 @@ class BakedObjective final : public PathObjective {
 
  private:
   // What evaluate reads, per frame and per sector in contiguous arrays (a sample touches one
-  // frame record, one sector record and, outside the hull, a few vertices of each of its two
-  // frames), copied from the hulls at baking.
+  // frame record and one sector record of each of its two frames, and the hull's vertices only
+  // when the nearest point is not found on or at the ends of the edge the sector faces), copied
+  // from the hulls at baking.
   struct FrameData {
     double centre_x = 0, centre_y = 0;  // the fan's centre (plane units)
     int first_sector = 0, sector_count = 0;
     int first_vertex = 0, vertex_count = 0;
     bool flight = false;
-    bool search = true;  // false: a flight frame whose sectors all have the same quadratic (no
-                         // contact column), so that neither term depends on the sector
   };
   struct alignas(64) SectorData {
     double from_x, from_y, to_x, to_y;  // the wedge (FanSector::from, to)
     Quadratic q;                        // its torque term
-    double edge_x, edge_y;              // the hull edge it faces: first vertex and edge vector,
-    double along_x, along_y;            // for the fan triangle's outer side
-    int edge;                           // that edge (vertex edge -> edge + 1)
-    bool triangle;                      // a fan triangle of the hull (in_hull and >= 3 vertices)
+    // The hull edge the sector faces (vertex `edge` -> edge + 1), where the search for the
+    // nearest point starts: its first vertex, edge vector and squared length (-1 for hulls of
+    // fewer than 3 vertices and point edges, which take the general search).
+    double edge_x, edge_y, along_x, along_y, length_squared;
+    int edge;
+    bool triangle;              // a fan triangle of the hull (in_hull and >= 3 vertices)
+    double before_x, before_y;  // the edge before (into edge_x, edge_y)
+    double end_x, end_y;        // the facing edge's last vertex
+    double after_x, after_y;    // the edge after (out of end_x, end_y)
   };
 
   const Hulls& hulls_;
