@@ -32,14 +32,15 @@ inline HullPoint nearest_on_polygon(const Eigen::Vector2d* v, std::size_t n, con
   HullPoint best;
   if (n >= 3) {
     bool inside = true;
-    for (std::size_t i = 0; i < n && inside; ++i) inside = cross(v[(i + 1) % n] - v[i], x - v[i]) >= 0;
+    for (std::size_t i = 0; i < n && inside; ++i)
+      inside = cross(v[i + 1 == n ? 0 : i + 1] - v[i], x - v[i]) >= 0;
     if (inside) return {x, 0.0, true};
   }
   best.inside = false;
   best.distance_squared = std::numeric_limits<double>::infinity();
   const std::size_t edges = n == 1 ? 1 : n;
   for (std::size_t i = 0; i < edges; ++i) {
-    const Eigen::Vector2d p = on_segment(v[i], v[(i + 1) % n], x);
+    const Eigen::Vector2d p = on_segment(v[i], v[i + 1 >= n ? 0 : i + 1], x);
     const double d2 = (p - x).squaredNorm();
     if (d2 < best.distance_squared) {
       best.distance_squared = d2;
