@@ -126,8 +126,8 @@ int find_sector(const FrameHull& h, const Eigen::Vector2d& x, int hint) {
   if (d.x() == 0 && d.y() == 0) return k;
   // Walk one way round from the hint (a fixed direction always ends within n steps; the first
   // test picks the nearer way for a nearby query). Exact tests first: no norms on the hot path.
-  const int step = cross(h.sectors[static_cast<std::size_t>(k)].from, d) < 0 ? n - 1 : 1;
-  for (int i = 0; i < n; ++i, k = (k + step) % n) {
+  const bool back = cross(h.sectors[static_cast<std::size_t>(k)].from, d) < 0;
+  for (int i = 0; i < n; ++i, k = back ? (k == 0 ? n - 1 : k - 1) : (k + 1 == n ? 0 : k + 1)) {
     const FanSector& s = h.sectors[static_cast<std::size_t>(k)];
     if (cross(s.from, d) >= 0 && cross(d, s.to) >= 0) return k;
   }
