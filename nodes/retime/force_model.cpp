@@ -1,6 +1,8 @@
 // The fan force model (force_model.hpp): sectors about each hull's centre, λ and τ affine in each.
 #include "kg/retime/force_model.hpp"
 
+#include "convex_nearest.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -19,14 +21,6 @@ Eigen::Vector2d rotate_ccw(const Eigen::Vector2d& v) {
 }
 Eigen::Vector2d rotate_cw(const Eigen::Vector2d& v) {
   return {v.y(), -v.x()};
-}
-
-// Closest point of segment [a, b] to x.
-Eigen::Vector2d on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
-  const Eigen::Vector2d e = b - a;
-  const double ee = e.squaredNorm();
-  if (ee == 0) return a;
-  return a + std::clamp((x - a).dot(e) / ee, 0.0, 1.0) * e;
 }
 
 // A ray of the fan: direction from the centre and λ at centre + direction.
@@ -132,8 +126,8 @@ int find_sector(const FrameHull& h, const Eigen::Vector2d& x, int hint) {
   if (d.x() == 0 && d.y() == 0) return k;
   // Walk one way round from the hint (a fixed direction always ends within n steps; the first
   // test picks the nearer way for a nearby query). Exact tests first: no norms on the hot path.
-  const int step = cross(h.sectors[static_cast<std::size_t>(k)].from, d) < 0 ? n - 1 : 1;
-  for (int i = 0; i < n; ++i, k = (k + step) % n) {
+  const bool back = cross(h.sectors[static_cast<std::size_t>(k)].from, d) < 0;
+  for (int i = 0; i < n; ++i, k = back ? (k == 0 ? n - 1 : k - 1) : (k + 1 == n ? 0 : k + 1)) {
     const FanSector& s = h.sectors[static_cast<std::size_t>(k)];
     if (cross(s.from, d) >= 0 && cross(d, s.to) >= 0) return k;
   }
@@ -214,27 +208,8 @@ std::vector<PatchForce> patch_forces(const FrameHull& h, const Eigen::VectorXd& 
 }
 
 HullPoint closest_point_on_polygon(std::span<const Eigen::Vector2d> v, const Eigen::Vector2d& x) {
-  const std::size_t n = v.size();
-  if (n == 0) throw std::invalid_argument("closest point: the polygon has no vertex");
-  HullPoint best;
-  if (n >= 3) {
-    bool inside = true;
-    for (std::size_t i = 0; i < n && inside; ++i) inside = cross(v[(i + 1) % n] - v[i], x - v[i]) >= 0;
-    if (inside) return {x, 0.0, true};
-  }
-  best.inside = false;
-  best.distance_squared = std::numeric_limits<double>::infinity();
-  const std::size_t edges = n == 1 ? 1 : n;
-  for (std::size_t i = 0; i < edges; ++i) {
-    const Eigen::Vector2d p = on_segment(v[i], v[(i + 1) % n], x);
-    const double d2 = (p - x).squaredNorm();
-    if (d2 < best.distance_squared) {
-      best.distance_squared = d2;
-      best.point = p;
-    }
-  }
-  if (best.distance_squared == 0) best.inside = true;
-  return best;
+  if (v.empty()) throw std::invalid_argument("closest point: the polygon has no vertex");
+  return detail::nearest_on_polygon(v.data(), v.size(), x);
 }
 
 HullPoint closest_point(const FrameHull& h, const Eigen::Vector2d& x, int& hint) {
@@ -242,28 +217,12 @@ HullPoint closest_point(const FrameHull& h, const Eigen::Vector2d& x, int& hint)
   if (n < 3) return closest_point_on_polygon(h.vertices, x);
   hint = find_sector(h, x, hint);
   const FanSector& s = h.sectors[static_cast<std::size_t>(hint)];
-  auto vertex = [&](int i) -> const Eigen::Vector2d& {
-    return h.vertices[static_cast<std::size_t>(((i % n) + n) % n)];
-  };
-  int e = s.edge;
-  if (s.in_hull && cross(vertex(e + 1) - vertex(e), x - vertex(e)) >= 0) return {x, 0.0, true};
-  // x is beyond edge e (or in a wedge outside at the centre): the nearest point is on the part of
-  // the boundary x sees, along which the distance has one minimum; walk downhill from e.
-  auto distance2 = [&](int i) { return (on_segment(vertex(i), vertex(i + 1), x) - x).squaredNorm(); };
-  double best = distance2(e);
-  bool moved = false;
-  for (int step : {1, -1}) {
-    if (moved) break;
-    for (int i = 0; i < n; ++i) {
-      const double d2 = distance2(e + step);
-      if (!(d2 < best)) break;
-      best = d2;
-      e = ((e + step) % n + n) % n;
-      moved = true;
-    }
-  }
-  const Eigen::Vector2d p = on_segment(vertex(e), vertex(e + 1), x);
-  return {p, best, best == 0};
+  const Eigen::Vector2d& u = h.vertices[static_cast<std::size_t>(s.edge)];
+  if (s.in_hull && cross(h.vertices[static_cast<std::size_t>((s.edge + 1) % n)] - u, x - u) >= 0)
+    return {x, 0.0, true};
+  // x is beyond edge s.edge, or in a wedge outside at the centre (which touches that edge): the
+  // walk from there is short.
+  return detail::nearest_from_edge(h.vertices.data(), n, x, s.edge);
 }
 
 }  // namespace kg::retime

@@ -3,6 +3,9 @@
 // patch forces, and the closest hull point with hints.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <random>
 
 #include "hull_test_bodies.hpp"
@@ -312,6 +315,32 @@ TEST_CASE("The closest hull point, with and without hints", "[force_model]") {
       CHECK(fast.distance_squared == Approx(slow.distance_squared).margin(1e-12));
       CHECK((fast.point - slow.point).norm() < 1e-9);
       if (fast.inside) CHECK(fast.point == x);
+    }
+  }
+  // Thin hulls (points of a flat ellipse) with the centre on an edge or at a vertex, where a point
+  // in a wedge outside at the centre may see the far side of the hull closer than the near one.
+  for (int i = 0; i < 200; ++i) {
+    std::uniform_real_distribution<double> unit(0, 1);
+    FrameHull h;
+    const int n = 3 + static_cast<int>(unit(rng) * 8);
+    std::vector<double> angles;
+    for (int k = 0; k < n; ++k) angles.push_back(2 * std::numbers::pi * unit(rng));
+    std::sort(angles.begin(), angles.end());
+    for (double a : angles) h.vertices.emplace_back(15 * std::cos(a), 1 + 0.3 * std::sin(a));
+    const std::size_t j = static_cast<std::size_t>(unit(rng) * n);
+    h.centre = i % 2 ? h.vertices[j] : Eigen::Vector2d(0.5 * (h.vertices[j] + h.vertices[(j + 1) % h.vertices.size()]));
+    h.lambda.assign(h.vertices.size(), Eigen::VectorXd());
+    h.centre_lambda = Eigen::VectorXd();
+    build_fan(h);
+    for (int k = 0; k < 20; ++k) {
+      const Eigen::Vector2d x = anywhere(rng);
+      int hint = k;
+      const HullPoint fast = closest_point(h, x, hint);
+      const HullPoint slow = closest_point_on_polygon(h.vertices, x);
+      INFO("hull " << i << " query (" << x.x() << ", " << x.y() << ")");
+      CHECK(fast.inside == slow.inside);
+      CHECK(fast.distance_squared == Approx(slow.distance_squared).margin(1e-12));
+      CHECK((fast.point - slow.point).norm() < 1e-9);
     }
   }
   // A segment and a point.

@@ -1,5 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
+#include <numbers>
 #include <random>
 
 #include "kg/retime/force_model.hpp"
@@ -50,7 +53,188 @@ BoxAndFlight box_and_flight() {
   return c;
 }
 
+// Random hulls of every kind the objective meets, with contact columns (so each fan sector has
+// its own quadratic), in runs of three frames: a polygon with the centre inside, at a vertex, on
+// an edge; a polygon without columns; a segment with the centre in the middle, at an end; an
+// infeasible point; a flight point. Five channels, the first three the root's.
+struct Mixed {
+  kg::motion::Skeleton skeleton;
+  Hulls hulls;
+  std::vector<FrameTorques> torques;
+  std::vector<Eigen::VectorXd> targets;
+};
+
+Mixed mixed(int frames, unsigned seed) {
+  using kg::motion::ChannelKind;
+  Mixed c;
+  c.skeleton.add_joint({.name = "root",
+                        .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition}}});
+  c.skeleton.add_joint({.name = "arm", .parent = 0, .channels = {{ChannelKind::Xrotation}, {ChannelKind::Zrotation}}});
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> unit(0, 1), signed_unit(-1, 1);
+  const int channels = 5, columns = 4;
+  auto random_vector = [&](int n, double scale) {
+    Eigen::VectorXd v(n);
+    for (int i = 0; i < n; ++i) v[i] = scale * signed_unit(rng);
+    return v;
+  };
+  auto random_lambda = [&] {
+    Eigen::VectorXd l(columns);
+    for (int i = 0; i < columns; ++i) l[i] = 100 * unit(rng);
+    return l;
+  };
+  for (int f = 0; f < frames; ++f) {
+    const int kind = (f / 3) % 8;
+    FrameHull h;
+    h.N = kind == 3 || kind == 7 ? Eigen::MatrixXd::Zero(channels, 0) : Eigen::MatrixXd(Eigen::MatrixXd::Random(channels, columns));
+    const int k = static_cast<int>(h.N.cols());
+    auto lambda = [&] { return k ? random_lambda() : Eigen::VectorXd(); };
+    const Eigen::Vector2d middle(4 * signed_unit(rng), 1 + unit(rng));
+    if (kind <= 3) {
+      // Points of an ellipse in angular order: a convex polygon, counter-clockwise.
+      const int n = 3 + static_cast<int>(unit(rng) * 10);
+      const double rx = 2 + 18 * unit(rng), ry = 0.5 + 4.5 * unit(rng), turn = 2 * std::numbers::pi * unit(rng);
+      std::vector<double> angles;
+      for (int i = 0; i < n; ++i) angles.push_back(turn + 2 * std::numbers::pi * unit(rng));
+      std::sort(angles.begin(), angles.end());
+      for (double a : angles) h.vertices.push_back(middle + Eigen::Vector2d(rx * std::cos(a), ry * std::sin(a)));
+      const int j = static_cast<int>(unit(rng) * n);
+      if (kind == 1) {
+        h.centre = h.vertices[static_cast<std::size_t>(j)];
+      } else if (kind == 2) {
+        h.centre = 0.5 * (h.vertices[static_cast<std::size_t>(j)] + h.vertices[static_cast<std::size_t>((j + 1) % n)]);
+      } else {
+        Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+        double total = 0;
+        for (const Eigen::Vector2d& v : h.vertices) {
+          const double w = unit(rng);
+          sum += w * v, total += w;
+        }
+        h.centre = sum / total;
+      }
+    } else if (kind <= 5) {
+      h.vertices = {middle, middle + Eigen::Vector2d(10 * signed_unit(rng), 2 * signed_unit(rng))};
+      h.centre = kind == 4 ? Eigen::Vector2d(0.5 * (h.vertices[0] + h.vertices[1])) : h.vertices[1];
+    } else {
+      h.status = kind == 6 ? HullStatus::Infeasible : HullStatus::Flight;
+      h.vertices = {middle};
+      h.centre = middle;
+    }
+    for (std::size_t i = 0; i < h.vertices.size(); ++i) h.lambda.push_back(lambda());
+    h.on_box.assign(h.vertices.size(), 0);
+    h.centre_lambda = lambda();
+    build_fan(h);
+    c.hulls.frames.push_back(std::move(h));
+    FrameTorques t;
+    t.velocity = random_vector(channels, 50);
+    t.acceleration = random_vector(channels, 20);
+    t.gravity = Eigen::Matrix<double, Eigen::Dynamic, 3>::Random(channels, 3) * 10;
+    c.torques.push_back(std::move(t));
+    c.targets.push_back(random_vector(channels, 100));
+  }
+  return c;
+}
+
+// One frame's integrand and gradient as the objective defines it, computed the plain way: the
+// sector searched from 0, the closest point by looking at every edge.
+struct Reference {
+  double value, d_a, d_b;
+};
+Reference reference_frame(const BakedObjective& o, const FrameHull& h, int f, const Eigen::Vector2d& x, double alpha) {
+  const Quadratic& q = o.quadratic(f, find_sector(h, x, 0));
+  const double a = x.x(), b = x.y();
+  Reference r{q[0] * b * b + q[1] * a * a + q[2] * a * b + q[3] * b + q[4] * a + q[5], 2 * q[1] * a + q[2] * b + q[4],
+              2 * q[0] * b + q[2] * a + q[3]};
+  if (h.status == HullStatus::Flight) {
+    const Quadratic& w = o.flight_quadratic(f);
+    r.value += alpha * (w[0] * b * b + w[1] * a * a + w[2] * a * b + w[3] * b + w[4] * a + w[5]);
+    r.d_a += alpha * (2 * w[1] * a + w[2] * b + w[4]);
+    r.d_b += alpha * (2 * w[0] * b + w[2] * a + w[3]);
+    return r;
+  }
+  const HullPoint c = closest_point_on_polygon(h.vertices, x);
+  if (!c.inside) {
+    const Eigen::Vector2d gap = x - c.point;
+    r.value += alpha * gap.squaredNorm();
+    r.d_a += 2 * alpha * gap.x();
+    r.d_b += 2 * alpha * gap.y();
+  }
+  return r;
+}
+
 }  // namespace
+
+TEST_CASE("the baked objective agrees with a plain evaluation everywhere, whatever the hint") {
+  const double fps = 30, alpha = 1000;
+  const Mixed c = mixed(96, 11);
+  const BakedObjective o(c.hulls, c.torques, c.targets, c.skeleton, fps, {.alpha = alpha, .beta = 1, .torque_scale = 40});
+  const int last = static_cast<int>(c.hulls.frames.size()) - 1;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> unit(0, 1);
+  int checked = 0, outside = 0;
+  // At a fan's centre, or on a ray between two sectors (through a vertex), more than one sector
+  // holds x, the torque term has a kink and its gradient is that of the sector the search
+  // meets first: only the value is compared there.
+  auto check = [&](double p, const Eigen::Vector2d& x, int& hint, bool on_ray = false) {
+    const double s = std::clamp(p * fps, 0.0, static_cast<double>(last));
+    const int f = std::min(static_cast<int>(s), last - 1);
+    const double u = s - f;
+    const Reference r0 = reference_frame(o, c.hulls.frames[static_cast<std::size_t>(f)], f, x, alpha);
+    const Reference r1 = reference_frame(o, c.hulls.frames[static_cast<std::size_t>(f) + 1], f + 1, x, alpha);
+    const SampleCost got = o.evaluate(p, x.x(), x.y(), hint);
+    const double value = (1 - u) * r0.value + u * r1.value;
+    // 1e-12 of the quantities each result is made of.
+    const double scale = 1e-12 * (std::abs(r0.value) + std::abs(r1.value) + 1);
+    INFO("p " << p << " frame " << f << " x (" << x.x() << ", " << x.y() << ")");
+    CHECK(std::abs(got.value - value) <= scale);
+    CHECK(std::abs(got.d_p - (r1.value - r0.value) * fps) <= scale * fps);
+    if (!on_ray) {
+      CHECK(std::abs(got.d_pddot - ((1 - u) * r0.d_a + u * r1.d_a)) <= scale);
+      CHECK(std::abs(got.d_pdot2 - ((1 - u) * r0.d_b + u * r1.d_b)) <= scale);
+    }
+    ++checked;
+    outside += !closest_point_on_polygon(c.hulls.frames[static_cast<std::size_t>(f)].vertices, x).inside;
+  };
+  const double duration = o.source_duration();
+  // A retimer's sweep: p rising, (p̈, ṗ²) wandering, one hint carried along, from a few starts.
+  for (int start : {0, 7, -3, 123456789}) {
+    int hint = start;
+    Eigen::Vector2d x(0, 1);
+    std::normal_distribution<double> step(0, 0.4);
+    for (double p = 0; p <= duration; p += 0.2 / fps) {
+      x += Eigen::Vector2d(3 * step(rng), step(rng));
+      x = x.cwiseMax(Eigen::Vector2d(-40, -6)).cwiseMin(Eigen::Vector2d(40, 30));
+      check(p, x, hint);
+    }
+  }
+  // Random jumps with random hints.
+  std::uniform_int_distribution<int> any_int;
+  for (int i = 0; i < 3000; ++i) {
+    int hint = i % 3 == 0 ? 0 : any_int(rng) - (i % 3 == 1 ? 0 : (1 << 30));
+    check(duration * unit(rng), Eigen::Vector2d(-40 + 80 * unit(rng), -6 + 36 * unit(rng)), hint);
+  }
+  // Near each hull's vertices and edges, inside and out, at the centre and at p beyond the clip.
+  for (int f = 0; f <= last; ++f) {
+    const FrameHull& h = c.hulls.frames[static_cast<std::size_t>(f)];
+    const auto n = h.vertices.size();
+    int hint = 0;
+    for (int i = 0; i < 40; ++i) {
+      const Eigen::Vector2d& v = h.vertices[static_cast<std::size_t>(i) % n];
+      const Eigen::Vector2d& w = h.vertices[(static_cast<std::size_t>(i) + 1) % n];
+      const double t = i % 2 ? unit(rng) : 0.0, offset = std::pow(10.0, -9 * unit(rng)) * (unit(rng) < 0.5 ? -1 : 1);
+      const Eigen::Vector2d direction(std::cos(7.0 * i), std::sin(7.0 * i));
+      const double p = (f + (i % 4 == 0 ? 0.0 : unit(rng))) / fps;
+      check(p, v + t * (w - v) + offset * direction, hint);
+    }
+    check(f / fps, h.centre, hint, true);
+    check(f / fps, h.vertices[0], hint, true);
+  }
+  int hint = 0;
+  check(-1, Eigen::Vector2d(0.5, 2), hint);
+  check(duration + 1, Eigen::Vector2d(-50, -3), hint);
+  CHECK(checked > 8000);
+  CHECK(outside > checked / 4);
+}
 
 TEST_CASE("bake_quadratic reproduces |τ − τ'|²") {
   const Eigen::Vector3d t0(1, 2, 3), ta(0.5, -1, 2), tb(-2, 0.3, 1), target(0.1, 0.2, -0.3);

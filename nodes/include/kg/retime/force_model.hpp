@@ -70,7 +70,8 @@ struct PatchForce {
 std::vector<PatchForce> patch_forces(const FrameHull& hull, const Eigen::VectorXd& lambda);
 
 // The point of the hull nearest to x (plane units) and its squared distance (0 inside). `hint` as
-// in find_sector: with it the search starts at x's sector and walks along the boundary.
+// in find_sector: with it the search starts at x's sector and walks along the boundary from the
+// edge that sector faces until the nearest point is certified (the answer does not depend on it).
 struct HullPoint {
   Eigen::Vector2d point = Eigen::Vector2d::Zero();
   double distance_squared = 0;

@@ -69,8 +69,11 @@ class BakedObjective final : public PathObjective {
   BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques, std::span<const Eigen::VectorXd> targets,
                  const motion::Skeleton& skeleton, double source_fps, const ObjectiveWeights& weights);
 
+  // `hint`: the caller's cursor (start it at 0, pass it back; any value is accepted and gives the
+  // same cost up to rounding): it holds the fan sectors of the last two frames met, so that
+  // successive samples start their sector searches where the last ones ended.
   SampleCost evaluate(double p, double pddot, double pdot_squared, int& hint) const override;
-  double source_duration() const override { return (static_cast<double>(quadratics_.size()) - 1) / fps_; }
+  double source_duration() const override { return (static_cast<double>(frames_.size()) - 1) / fps_; }
   double source_fps() const override { return fps_; }
 
   // The two parts of one frame's integrand at (p̈, ṗ²), and whether the point lies in its hull
@@ -91,22 +94,48 @@ class BakedObjective final : public PathObjective {
   double flight_excess(int frame, double pddot, double pdot_squared) const {
     return kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared);
   }
+  // The flight term's quadratic of a frame ((|r|² − least |r|²) / W², before α; all zero off
+  // flight) and the torque term's quadratic of one fan sector (β |τ − τ'|² / τ_scale²).
+  const Quadratic& flight_quadratic(int frame) const { return flight_[static_cast<std::size_t>(frame)]; }
   const Quadratic& quadratic(int frame, int sector) const {
-    return quadratics_[static_cast<std::size_t>(frame)][static_cast<std::size_t>(sector)];
+    const int first = frames_[static_cast<std::size_t>(frame)].first_sector;
+    return sectors_[static_cast<std::size_t>(first + sector)].q;
   }
 
  private:
-  struct FrameCost {
-    double value, d_a, d_b;
+  // What evaluate reads, per frame and per sector in contiguous arrays (a sample touches one
+  // frame record and one sector record of each of its two frames, and the hull's vertices only
+  // when the nearest point is not found on or at the ends of the edge the sector faces), copied
+  // from the hulls at baking.
+  struct FrameData {
+    double centre_x = 0, centre_y = 0;  // the fan's centre (plane units)
+    int first_sector = 0, sector_count = 0;
+    int first_vertex = 0, vertex_count = 0;
+    bool flight = false;
   };
-  FrameCost frame_cost(int frame, double a, double b, int& hint) const;
+  struct alignas(64) SectorData {
+    double from_x, from_y, to_x, to_y;  // the wedge (FanSector::from, to)
+    Quadratic q;                        // its torque term
+    // The hull edge the sector faces (vertex `edge` -> edge + 1), where the search for the
+    // nearest point starts: its first vertex, edge vector and squared length (-1 for hulls of
+    // fewer than 3 vertices and point edges, which take the general search).
+    double edge_x, edge_y, along_x, along_y, length_squared;
+    int edge;
+    bool triangle;              // a fan triangle of the hull (in_hull and >= 3 vertices)
+    double before_x, before_y;  // the edge before (into edge_x, edge_y)
+    double end_x, end_y;        // the facing edge's last vertex
+    double after_x, after_y;    // the edge after (out of end_x, end_y)
+  };
 
   const Hulls& hulls_;
   double fps_;
   ObjectiveWeights weights_;
-  std::vector<std::vector<Quadratic>> quadratics_;  // per frame, per fan sector
-  std::vector<Quadratic> flight_;                   // per frame: |r|² / W² − its least (zero off flight)
-  std::vector<double> flight_least_;                // per frame: |r|² / W² at the least-squares point
+  int last_frame_ = 0;
+  std::vector<FrameData> frames_;
+  std::vector<SectorData> sectors_;        // every frame's fan sectors, frame after frame
+  std::vector<Eigen::Vector2d> vertices_;  // every frame's hull vertices, frame after frame
+  std::vector<Quadratic> flight_;          // per frame: |r|² / W² − its least (zero off flight)
+  std::vector<double> flight_least_;       // per frame: |r|² / W² at the least-squares point
 };
 
 }  // namespace kg::retime
