@@ -56,7 +56,7 @@ bool valid_utf8(const std::string& text) {
   for (std::size_t i = 0; i < text.size();) {
     const auto c = static_cast<unsigned char>(text[i]);
     const int extra = c < 0x80 ? 0 : (c >> 5) == 0x6 ? 1 : (c >> 4) == 0xe ? 2 : (c >> 3) == 0x1e ? 3 : -1;
-    if (extra < 0 || i + extra >= text.size() + (extra == 0)) return false;
+    if (extra < 0 || i + extra + 1 > text.size()) return false;
     for (int k = 1; k <= extra; ++k)
       if ((static_cast<unsigned char>(text[i + k]) >> 6) != 0x2) return false;
     i += 1 + extra;
@@ -347,6 +347,11 @@ bool write_all(int fd, const std::string& text) {
             << (r.message.empty() ? "" : ": " + r.message) << '\n';
   std::cout.flush();
   std::cerr.flush();
+  // Done: a stop signal from now on would remove outputs the record below vouches for.
+  sigset_t stop_signals;
+  ::sigemptyset(&stop_signals);
+  for (int sig : kStopSignals) ::sigaddset(&stop_signals, sig);
+  ::sigprocmask(SIG_BLOCK, &stop_signals, nullptr);
   fs::rename(partial, b.log(item), ec);
   g_partial_log[0] = 0;
   const bool sent = write_all(result_fd, graph::manifest_line(r) + "\n");
