@@ -7,7 +7,9 @@
 //                                the folders that lead to it from the inputs' common folder
 //   DIR/logs/ITEM.log            everything the item printed
 //   DIR/manifest.jsonl           manifest.hpp; DIR/manifest.shard-I-of-N.jsonl for --shard I/N
+//   DIR/.manifest*.lock          held by the one batch writing that manifest
 //   DIR/inputs.txt, DIR/slurm/   with --slurm: the frozen input list and the jobs' own logs
+//   DIR/batch.json               with --slurm: the graph's and settings' hashes the jobs run with
 #pragma once
 
 #include "host.hpp"

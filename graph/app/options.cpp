@@ -99,7 +99,8 @@ verbs:
 options:
   --set NAME=VALUE  give the graph variable NAME a value (GRAPH documents its variables at the top)
   --jobs N          run: independent branches on up to N threads (default 1); batch: items at
-                    once (default: the cores this process may use)
+                    once (default: the cores this process may use; with --slurm, the CPUs
+                    of each array task, default 1)
   --report FILE     write per-node status, wall times and reported figures as JSON to FILE
   --reproducible    run: files written come out byte for byte the same on every run and machine
                     (no wall-clock times in them; those stay in --report); batch always is

@@ -1,4 +1,5 @@
-// `kinegraph batch ... --slurm SCRIPT`: the batch as Slurm jobs. Writes
+// `kinegraph batch ... --slurm SCRIPT`: the batch as Slurm jobs. Writes (batch.cpp writes
+// DIR/batch.json beside them)
 //   DIR/inputs.txt     the inputs, frozen, so every array task sees the same sorted list
 //   SCRIPT             an sbatch array job: task I runs `kinegraph batch ... --shard I/N`
 //   SCRIPT's merge     beside SCRIPT, "<name>.merge<ext>": `kinegraph merge DIR`, to submit with
