@@ -73,6 +73,14 @@ PendingSlot* track(std::array<PendingSlot, N>& slots, const fs::path& file) {
   return nullptr;
 }
 
+// Lock- and allocation-free: called from signal handlers.
+template <std::size_t N>
+void unlink_tracked(std::array<PendingSlot, N>& slots) noexcept {
+  for (PendingSlot& slot : slots) {
+    if (slot.state.load() == 2) ::unlink(slot.path);
+  }
+}
+
 struct WrittenFiles {
   std::mutex mutex;
   std::vector<fs::path> paths;
@@ -176,11 +184,7 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
   files.paths.push_back(target);
 }
 
-void remove_written_files() noexcept {
-  for (PendingSlot& slot : written_slots) {
-    if (slot.state.load() == 2) ::unlink(slot.path);
-  }
-}
+void remove_written_files() noexcept { unlink_tracked(written_slots); }
 
 std::vector<fs::path> input_files_read() {
   InputFiles& files = input_files();
@@ -188,11 +192,7 @@ std::vector<fs::path> input_files_read() {
   return {files.paths.begin(), files.paths.end()};
 }
 
-void remove_pending_temporaries() noexcept {
-  for (PendingSlot& slot : pending_slots) {
-    if (slot.state.load() == 2) ::unlink(slot.path);
-  }
-}
+void remove_pending_temporaries() noexcept { unlink_tracked(pending_slots); }
 
 std::vector<fs::path> written_files() {
   WrittenFiles& files = written();
