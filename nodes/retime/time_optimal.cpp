@@ -5,6 +5,8 @@
 #include <limits>
 #include <stdexcept>
 
+#include "kg/retime/retimer.hpp"
+
 namespace kg::retime {
 
 namespace {
@@ -128,7 +130,15 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
   result.feasible = true;
   std::vector<double> source_times(static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) source_times[static_cast<std::size_t>(i)] = i / fps;
-  const int segments = std::max(1, static_cast<int>(std::ceil(t / options.knot_spacing - 1e-9)));
+  const double wanted = std::ceil(t / options.knot_spacing - 1e-9);
+  if (!(wanted <= kMaxSegments)) {
+    result.feasible = false;
+    result.message = "the time-optimal playback lasts " + std::to_string(t) + " s, more than " +
+                     std::to_string(kMaxSegments) + " knots of " + std::to_string(options.knot_spacing) +
+                     " s: playback nearly stops somewhere";
+    return result;
+  }
+  const int segments = std::max(1, static_cast<int>(wanted));
   result.warp = fit_warp(result.output_times, source_times, segments);
   if (!result.warp.strictly_increasing()) {
     result.feasible = false;

@@ -66,6 +66,16 @@ TEST_CASE("a time-optimal playback that nearly stops still gives an increasing w
   }
 }
 
+TEST_CASE("a playback slowed to a near stop is refused before its spline would need millions of knots") {
+  std::vector<Polygon> hulls;
+  for (int i = 0; i <= 60; ++i) hulls.push_back(box(-20, 20, 0, i >= 28 && i <= 32 ? 1e-14 : 16));
+  const TimeOptimalResult r = time_optimal(hulls, 30, {});
+  CHECK_FALSE(r.feasible);
+  CHECK(r.warp.controls.empty());
+  CHECK_THAT(r.message, Catch::Matchers::Contains("more than 4096 knots") &&
+                            Catch::Matchers::Contains("playback nearly stops somewhere"));
+}
+
 TEST_CASE("fit_warp refuses samples that do not start at the origin or do not increase") {
   CHECK_THROWS_WITH(fit_warp({0, 0.5, 1}, {0.5, 1, 1.5}, 4), Catch::Matchers::Contains("start at output 0"));
   CHECK_THROWS_WITH(fit_warp({0, 0.5, 0.4}, {0, 1, 1.5}, 4), Catch::Matchers::Contains("does not follow"));

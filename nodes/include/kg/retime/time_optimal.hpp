@@ -29,7 +29,8 @@ using Polygon = std::vector<Eigen::Vector2d>;
 
 struct TimeOptimalOptions {
   double point_tolerance = 0.05;  // relative half-width in ṗ² of the box around a point hull
-  double knot_spacing = 0.1;      // output seconds between the fitted warp's controls (> 0)
+  double knot_spacing = 0.1;      // output seconds between the fitted warp's controls (> 0); a
+                                  // playback needing more than kMaxSegments of them is refused
 };
 
 struct TimeOptimalResult {
