@@ -4,8 +4,6 @@
 // content hashes, --force, shards and their merge, the Slurm scripts run as the array would run
 // them, Ctrl-C, and bad usage.
 #include <signal.h>
-#include <spawn.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -92,38 +90,21 @@ struct Setup {
   }
 };
 
-// kinegraph ARGS running in the background, in a process group of its own as a shell runs a job
-// (so the terminal's SIGINT reaches the whole group), stderr to a file.
+// kinegraph ARGS running in the background in a process group of its own (spawn_program),
+// stderr to a file; killed with its group if the test ends first.
 struct Background {
   pid_t pid = 0;
   fs::path err;
 
-  Background(const std::vector<std::string>& args, fs::path err_file) : err(std::move(err_file)) {
-    std::vector<std::string> text{(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph").string()};
-    text.insert(text.end(), args.begin(), args.end());
-    std::vector<char*> argv;
-    for (std::string& a : text) argv.push_back(a.data());
-    argv.push_back(nullptr);
-    posix_spawnattr_t attributes;
-    posix_spawnattr_init(&attributes);
-    posix_spawnattr_setflags(&attributes, POSIX_SPAWN_SETPGROUP);
-    posix_spawnattr_setpgroup(&attributes, 0);
-    posix_spawn_file_actions_t actions;
-    posix_spawn_file_actions_init(&actions);
-    posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC,
-                                     0644);
-    posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, "/dev/null", O_WRONLY, 0);
-    const int spawned = posix_spawn(&pid, argv[0], &actions, &attributes, argv.data(), environ);
-    posix_spawn_file_actions_destroy(&actions);
-    posix_spawnattr_destroy(&attributes);
-    if (spawned != 0) pid = 0;
-  }
+  Background(const std::vector<std::string>& args, fs::path err_file)
+      : pid(kg::test::spawn_program(fs::path(KG_BINARY_DIR) / "bin" / "kinegraph", args, {}, "/dev/null",
+                                    err_file, true)),
+        err(std::move(err_file)) {}
   // The exit code, or 128 + the signal.
   int wait() {
-    int status = 0;
-    ::waitpid(pid, &status, 0);
+    const int code = kg::test::wait_program(pid);
     pid = 0;
-    return WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    return code;
   }
   ~Background() {
     if (pid > 0) {
