@@ -215,6 +215,7 @@ struct Batch {
 bool still_done(const graph::ManifestRecord& r, Item& item, const Batch& b) {
   if (!r.ok() || r.graph_sha256 != b.graph_sha256 || r.settings_sha256 != b.settings_sha256) return false;
   auto unchanged = [&](const graph::ManifestFile& file) {
+    if (file.path == r.input) return true;  // compared by input_sha256 below, not hashed twice
     const fs::path path = fs::path(file.path).is_absolute() ? fs::path(file.path) : b.dir / file.path;
     std::error_code ec;
     if (fs::file_size(path, ec) != file.bytes || ec) return false;
@@ -330,7 +331,9 @@ bool write_all(int fd, const std::string& text) {
     for (const graph::ManifestFile& known : files)
       if (known.path == entry.path) return;  // written twice
     try {
-      entry.sha256 = graph::sha256_file(file);
+      // The input was hashed before the run.
+      entry.sha256 =
+          entry.path == r.input && !r.input_sha256.empty() ? r.input_sha256 : graph::sha256_file(file);
       entry.bytes = fs::file_size(file);
     } catch (const std::exception& e) {
       r.status = "failed";
