@@ -182,6 +182,7 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
   for (std::size_t i = 0; i < np; ++i) {
     d.points[i].rest_height = rest[i];
     d.points[i].heights = heights[i];
+    d.points[i].rest_levels.assign(static_cast<std::size_t>(frames), rest[i]);
   }
   if (frames < 2) return d;
 
@@ -231,6 +232,7 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
           low = std::min(low, heights[i][static_cast<std::size_t>(g)]);
         base[static_cast<std::size_t>(f)] = low;
       }
+    d.points[i].rest_levels = base;
     bool in = false;
     int start = 0;
     for (int f = 0; f < frames; ++f) {

@@ -32,6 +32,7 @@ class ContactsNode final : public Node {
     options_.plants.min_duration_s = p.get<double>("min_duration_s");
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
     options_.plants.floor = retarget::parse_floor(p.get<std::string>("floor"));
+    options_.support_acceleration = p.get<double>("support_acceleration");
   }
 
   void run(RunContext& ctx) const override {
@@ -72,7 +73,9 @@ NodeType contacts_type() {
           "polygonal patches fixed on segments, with their world positions and Jacobians. Detected (path "
           "empty): per foot a heel-to-toe-tip rectangle (kg/retime/contacts.hpp says how it is sized), its "
           "heel pair touching while the heel is planted, its tip pair while the toe tip is (near the floor "
-          "and slow, as retarget.footplants detects). Or read from a contact file (YAML version 1: patches "
+          "and slow, as retarget.footplants detects; or near the floor at a frame the root is held up "
+          "without other "
+          "contact: a landing's impact). Or read from a contact file (YAML version 1: patches "
           "on named joints, vertices in the joint's frame, frame or time ranges).",
       .inputs = {{"motion", "kg.Motion", true, "the clip (its poses place the vertices)"}},
       .outputs = {{"contacts", "kg.Contacts", true,
@@ -131,6 +134,15 @@ NodeType contacts_type() {
               .doc = "s: a point's rest level is its lowest height within this window (0: the whole clip)",
               .min = 0.0,
               .max = 100.0},
+          ParamSpec{.name = "support_acceleration",
+                    .type = ParamType::Float,
+                    .default_value = d.support_acceleration,
+                    .doc =
+                        "m/s²: at frames without plants whose root accelerates upward more than this above "
+                        "free fall, feet within the leave height touch however fast they move (a landing's "
+                        "impact, a takeoff's last push); 0: off",
+                    .min = 0.0,
+                    .max = 100.0},
           ParamSpec{.name = "floor",
                     .type = ParamType::String,
                     .default_value = std::string("auto"),

@@ -66,6 +66,72 @@ std::pair<int, Eigen::Vector3d> toe_tip(const motion::Skeleton& sk, int foot) {
                               "' has neither a child (toe) nor an End Site to find its tip");
 }
 
+// FootContactOptions::support_acceleration: in each run of frames without any active vertex
+// that a plant bounds, from that end inwards and for as long as the root is held up, activates the
+// heel or tip pair (vertices 3, 0 or 1, 2 of each foot) of every detection point d.points[2 foot]
+// (heel) and [2 foot + 1] (tip) within the leave height. Only next to plants: a figure gliding
+// over the floor without ever planting is not taken for one standing. Returns the frames it gave
+// contact.
+int touch_where_supported(const motion::Motion& m, const retarget::FootplantDetection& d,
+                          const FootContactOptions& o, std::vector<std::vector<bool>>& active) {
+  if (!(o.support_acceleration >= 0) || !std::isfinite(o.support_acceleration))
+    throw std::invalid_argument("contacts: support_acceleration " + fmt(o.support_acceleration) +
+                                " m/s² (expected a finite number >= 0)");
+  constexpr double kCaptureGravity = 9.81;  // m/s²
+  const int frames = m.frame_count();
+  const int k = std::max(1, static_cast<int>(std::lround(m.fps / 30.0)));
+  if (o.support_acceleration == 0 || frames < 2 * k + 1) return 0;
+  const motion::Skeleton& sk = *m.skeleton;
+  std::vector<double> root_height(static_cast<std::size_t>(frames));
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  for (int f = 0; f < frames; ++f) {
+    motion::forward_kinematics(sk, m.values.row(f), world);
+    root_height[static_cast<std::size_t>(f)] = world.front().translation().y();
+  }
+  const double leave = o.plants.height_threshold * o.plants.hysteresis;
+  const double to_per_second2 = (m.fps / k) * (m.fps / k);
+  const auto idle = [&](int f) {
+    const std::vector<bool>& on = active[static_cast<std::size_t>(f)];
+    return std::none_of(on.begin(), on.end(), [](bool b) { return b; });
+  };
+  // Activates frame f's pairs near the floor if the root is held up there; false if not.
+  const auto touch = [&](int f) {
+    if (f < k || f + k >= frames) return false;
+    const auto y = [&](int g) { return root_height[static_cast<std::size_t>(g)]; };
+    if ((y(f + k) - 2 * y(f) + y(f - k)) * to_per_second2 <= -kCaptureGravity + o.support_acceleration)
+      return false;
+    std::vector<bool>& on = active[static_cast<std::size_t>(f)];
+    bool touched = false;
+    for (std::size_t i = 0; i < d.points.size(); ++i) {
+      const retarget::PlantPoint& point = d.points[i];
+      const std::size_t at = static_cast<std::size_t>(f);
+      if (point.heights[at] - point.rest_levels[at] > leave) continue;
+      const std::size_t foot = i / 2;
+      const bool is_tip = i % 2 == 1;
+      on[4 * foot + (is_tip ? 1 : 0)] = true;
+      on[4 * foot + (is_tip ? 2 : 3)] = true;
+      touched = true;
+    }
+    return touched;
+  };
+  int supported = 0;
+  for (int first = 0; first < frames;) {
+    if (!idle(first)) {
+      ++first;
+      continue;
+    }
+    int last = first;
+    while (last + 1 < frames && idle(last + 1)) ++last;
+    int from = first, to = last;
+    if (first > 0)
+      while (from <= to && touch(from)) ++from, ++supported;
+    if (last + 1 < frames)
+      while (to >= from && touch(to)) --to, ++supported;
+    first = last + 1;
+  }
+  return supported;
+}
+
 }  // namespace
 
 bool ContactFrame::touching(int patch) const {
@@ -261,6 +327,11 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
       on[4 * foot + (is_tip ? 2 : 3)] = true;
     }
   }
+  const int supported = touch_where_supported(m, d, o, active);
+  if (supported > 0)
+    notes.push_back(std::to_string(supported) +
+                    " frames without plants touch where the root is held up (support_acceleration " +
+                    fmt(o.support_acceleration) + " m/s²): a foot near the floor however fast it moves");
   Contacts c = assemble_contacts(m, std::move(patches), active);
   c.source = "detected";
   c.notes = std::move(notes);

@@ -13,6 +13,7 @@
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
+#include "kg/motion/resample.hpp"
 #include "kg/retime/contacts.hpp"
 
 using namespace kg;
@@ -245,6 +246,53 @@ TEST_CASE("Detected feet on a real walk: heel-to-toe soles and alternating suppo
     CHECK_THROWS_WITH(detect_contacts(walk, {.feet = {"lfoot"}, .width_ratio = 0}),
                       Catch::Contains("width_ratio"));
   }
+}
+
+TEST_CASE("A landing's impact touches though the feet still slide: the root is held up", "[contacts]") {
+  // CMU 13_13 (Daz BVH), a forward jump: its feet strike the floor still moving forward, faster
+  // than plants admit, while the floor already stops the fall (the root accelerates upwards).
+  const std::string path = kData + "/cmu/bvh_daz/13_13.bvh";
+  if (!std::filesystem::exists(path)) {
+    WARN("skipped: " << path << " not found");
+    return;
+  }
+  const motion::Motion jump = motion::resample(io::import_bvh(path, {}).motion, 30);
+  const Contacts plain = detect_contacts(jump, {.support_acceleration = 0});
+  const Contacts held = detect_contacts(jump, {});
+  // The longest run without contact by plants alone: the jump's flight and its misread ends.
+  const std::vector<Phase> before = phases(plain);
+  Phase flight{{}, 0, -1};
+  for (const Phase& p : before)
+    if (p.patches.empty() && p.last - p.first > flight.last - flight.first) flight = p;
+  INFO(describe(plain) << "-- with support:\n" << describe(held));
+  REQUIRE(flight.last - flight.first + 1 >= 15);
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(jump.skeleton->joint_count()));
+  auto root_height = [&](int f) {
+    motion::forward_kinematics(*jump.skeleton, jump.values.row(f), world);
+    return world.front().translation().y();
+  };
+  int gained = 0, last_gained = -1;
+  for (int f = 0; f < jump.frame_count(); ++f) {
+    const bool was = !plain.frames[static_cast<std::size_t>(f)].points.empty();
+    const bool is = !held.frames[static_cast<std::size_t>(f)].points.empty();
+    CHECK((is || !was));  // support only adds
+    if (is == was) continue;
+    ++gained;
+    last_gained = f;
+    // Only where the root is held up (and, by construction, at the ends of runs without plants:
+    // here the landing of the jump and the Daz T-pose's frame 1).
+    const double acceleration = (root_height(f + 1) - 2 * root_height(f) + root_height(f - 1)) * 30 * 30;
+    CHECK(acceleration > -9.81 + 4.9);
+  }
+  CHECK(gained >= 1);
+  CHECK(last_gained == flight.last);  // the landing's impact
+  // The flight itself stays without contact: at least 0.4 s of it.
+  int still_flying = 0;
+  for (int f = flight.first; f <= flight.last; ++f)
+    still_flying += held.frames[static_cast<std::size_t>(f)].points.empty();
+  CHECK(still_flying >= 12);
+  CHECK_THROWS_WITH(detect_contacts(jump, {.support_acceleration = -1}),
+                    Catch::Contains("support_acceleration"));
 }
 
 TEST_CASE("Detected feet on the MotionBuilder BVH of the same walk", "[contacts]") {

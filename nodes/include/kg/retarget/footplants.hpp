@@ -55,6 +55,9 @@ struct PlantPoint {
   PointRef point;
   double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest level)
   std::vector<double> heights{};  // m, world: its height at every frame of the motion
+  // m, world: at every frame, the level its height is measured above to detect plants (its
+  // lowest height within rest_window_s around the frame, or rest_height).
+  std::vector<double> rest_levels{};
 };
 
 struct Footplant {

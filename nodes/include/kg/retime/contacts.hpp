@@ -26,7 +26,9 @@
 //     (on the foot when it has no toe child), so toes bending at push-off carry the tip vertices.
 // The heel pair touches while the heel point (heel centre) is planted, the tip pair while the toe
 // tip is planted, as kg::retarget::detect_footplants finds them (near the floor and slow); a foot
-// touches while either pair does.
+// touches while either pair does. A frame left without contact whose root is held up (a landing's
+// impact, a takeoff's last push: support_acceleration) lets a pair near the floor touch however
+// fast it moves.
 //
 //   Contacts c = detect_contacts(walk, {});
 //   Eigen::MatrixXd N;
@@ -108,6 +110,13 @@ struct FootContactOptions {
   // A foot bears weight while it rolls, so contacts keep a plant's rolling ends (trim_distance 0)
   // and admit faster points than footplants do (0.3 m/s: a heel strikes at a few dm/s; at 0.15 m/s
   // CMU 16_15 loses half its double supports).
+  // Frames the plants leave without contact while the root is held up (its vertical acceleration,
+  // by second differences over about 1/30 s, above −9.81 + support_acceleration m/s²: the clip is
+  // taken as captured under Earth's gravity): there a foot point within the plants' leave height
+  // (height_threshold × hysteresis above its rest level) touches however fast it moves, so the
+  // frames of a landing's impact and of a takeoff's last push, where feet still strike or slide,
+  // are not taken for flight. 0: off (>= 0, m/s²).
+  double support_acceleration = 4.9;
   retarget::FootplantOptions plants = [] {
     retarget::FootplantOptions o;
     o.trim_distance = 0.0;
