@@ -41,7 +41,9 @@
 //    objective match): iterations, evaluations, solve time (median of 3 solves), the share of
 //    output frames inside their hulls.
 // 3. jump: the CMU jumps 16_01 (its header says 30 fps, it is 120), 13_11 and 13_13 (Daz BVH)
-//    through the same pipeline at 30 Hz, retimed to 0.5 and 0.65 of their duration: the playback
+//    through the same pipeline at 30 Hz, retimed to 0.5 and 0.65 of their duration, and to 0.5 with
+//    graphs/retime/jump_half.yaml's flight weight (fig. 1's experiment: the flight weighs more than
+//    the ground phases, which take what no timing can fit in their hulls): the playback
 //    speed ṗ at the output time each flight frame (HullStatus::Flight) plays, and the vertical
 //    acceleration of the root (and of the body's centre of mass) in the output motion at 30 Hz
 //    during flight, by second differences over output frames whose neighbours also play flight;
@@ -88,9 +90,10 @@ using retime::BodyModel;
 
 namespace {
 
-constexpr double kLink = 0.3;         // metres per chain link
-constexpr double kSmoothing = 0.04;   // s: graphs/retime.yaml's path smoothing
-constexpr double kSampleScale = 0.8;  // the duration whose solution gives the Obj rows' samples
+constexpr double kLink = 0.3;                  // metres per chain link
+constexpr double kSmoothing = 0.04;            // s: graphs/retime.yaml's path smoothing
+constexpr double kJumpHalfFlightWeight = 300;  // graphs/retime/jump_half.yaml's flight_weight
+constexpr double kSampleScale = 0.8;           // the duration whose solution gives the Obj rows' samples
 
 double now() {
   return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
@@ -730,8 +733,9 @@ struct Timed {
   retime::ClipRetime r;
   double call_ms = 0;
 };
-Timed retime_timed(const Clip& c, double scale, int runs) {
-  const retime::ClipRetimeOptions options{.solve = {.duration = scale * c.clip.duration()}};
+Timed retime_timed(const Clip& c, double scale, int runs, double flight_weight = 1) {
+  const retime::ClipRetimeOptions options{.solve = {.duration = scale * c.clip.duration()},
+                                          .flight_weight = flight_weight};
   std::vector<double> solve, call;
   Timed out;
   for (int i = 0; i < runs; ++i) {
@@ -745,13 +749,13 @@ Timed retime_timed(const Clip& c, double scale, int runs) {
   return out;
 }
 
-void print_retime(const Timed& t, double scale, double duration) {
+void print_retime(const Timed& t, double scale, double duration, double flight_weight = 1) {
   const retime::ClipRetime& r = t.r;
   std::printf(
-      "  to %.2fx (%.2f s): %s, %d iterations, %d evaluations, %d samples, solve %.1f ms (retime_clip "
-      "%.1f ms)\n",
-      scale, scale * duration, r.solve.converged ? "converged" : "NOT converged", r.solve.iterations,
-      r.solve.evaluations, r.solve.samples, r.solve.seconds * 1000, t.call_ms);
+      "  to %.2fx (%.2f s), flight weight %g: %s, %d iterations, %d evaluations, %d samples, solve %.1f ms "
+      "(retime_clip %.1f ms)\n",
+      scale, scale * duration, flight_weight, r.solve.converged ? "converged" : "NOT converged",
+      r.solve.iterations, r.solve.evaluations, r.solve.samples, r.solve.seconds * 1000, t.call_ms);
   std::printf(
       "    inside their hulls: %.1f%% of feasible-hull output frames, at their point: %.1f%% of flight or "
       "infeasible ones (%d output frames at the source rate); objective: feasibility %.4g, torque %.4g "
@@ -848,11 +852,14 @@ void jump_section(const Clip& c) {
       "\n  source at %.0f Hz during flight: root ÿ mean %.2f m/s² (%d frames), CoM ÿ mean %.2f m/s²\n", fps,
       src_root.mean, src_root.n, src_com.mean);
 
-  const std::vector<double> scales = {0.5, 0.65};
+  // graphs/retime.yaml's objective (flight weight 1) to 0.5 and 0.65, and graphs/retime/jump_half.yaml's
+  // (flight weight kJumpHalfFlightWeight) to 0.5.
+  const std::vector<std::pair<double, double>> settings = {
+      {0.5, 1.0}, {0.65, 1.0}, {0.5, kJumpHalfFlightWeight}};
   std::vector<retime::TimeWarp> warps;
-  for (double scale : scales) {
-    const Timed t = retime_timed(c, scale, 1);
-    print_retime(t, scale, c.clip.duration());
+  for (const auto [scale, flight_weight] : settings) {
+    const Timed t = retime_timed(c, scale, 1, flight_weight);
+    print_retime(t, scale, c.clip.duration(), flight_weight);
     warps.push_back(t.r.warp);
     Stats pdot, jump;
     for (int f = 0; f < frames; ++f)
@@ -878,7 +885,8 @@ void jump_section(const Clip& c) {
         fps, -9.81 / (scale * scale), root.mean, root.lo, root.hi, root.n, com.mean);
   }
   // Per flight frame and two frames either side: what the source does there.
-  std::printf("  frame  status      source root ÿ  CoM ÿ (m/s²)   ṗ at 0.5x  ṗ at 0.65x  hull\n");
+  std::printf("  frame  status      source root ÿ  CoM ÿ (m/s²)   ṗ at 0.5x  ṗ at 0.65x  0.5x fw %g  hull\n",
+              kJumpHalfFlightWeight);
   std::vector<double> root, com;
   heights(c.clip, c.body, root, com);
   for (auto [a, b] : runs)
@@ -1175,7 +1183,8 @@ int main(int argc, char** argv) {
   if (!jumps.empty())
     std::printf(
         "\n== jump: graphs/retime.yaml's pipeline at 30 Hz (de Leva male 70 kg, detected contacts, "
-        "smoothing %.2f s, default hulls, objective match), retimed to 0.5 and 0.65 of the duration ==\n",
+        "smoothing %.2f s, default hulls, objective match), retimed to 0.5 and 0.65 of the duration, and to "
+        "0.5 with jump_half.yaml's flight weight ==\n",
         kSmoothing);
   for (const JumpFile& j : jumps)
     if (const std::optional<Clip> c = load_clip(j.name, j.path, "", j.source_fps, 30)) jump_section(*c);

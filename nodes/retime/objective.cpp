@@ -66,7 +66,7 @@ double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::Vec
 BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques,
                                std::span<const Eigen::VectorXd> targets, const motion::Skeleton& skeleton,
                                double source_fps, const ObjectiveWeights& weights)
-    : hulls_(hulls), fps_(source_fps), weights_(weights) {
+    : hulls_(hulls), fps_(source_fps), weights_(weights), flight_alpha_(weights.alpha * weights.flight) {
   const std::size_t frames = hulls.frames.size();
   if (frames < 2) throw std::invalid_argument("retiming objective: fewer than 2 frames");
   if (torques.size() != frames || targets.size() != frames)
@@ -74,8 +74,10 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
                                 std::to_string(torques.size()) + " frames of torques and " +
                                 std::to_string(targets.size()) + " target torques (expected equal)");
   if (!(source_fps > 0)) throw std::invalid_argument("retiming objective: fps must be > 0");
-  if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.torque_scale > 0))
-    throw std::invalid_argument("retiming objective: alpha and beta must be >= 0 and the torque scale > 0");
+  if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.flight >= 0) || !(weights.torque_scale > 0) ||
+      !std::isfinite(flight_alpha_))
+    throw std::invalid_argument(
+        "retiming objective: alpha, beta and the flight weight must be finite and >= 0 and the torque scale > 0");
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
   frames_.resize(frames);
   last_frame_ = static_cast<int>(frames) - 1;
@@ -199,14 +201,15 @@ SampleCost BakedObjective::evaluate(double p, double pddot, double pdot_squared,
     const double rx = a - s.edge_x, ry = b - s.edge_y;
     const double side = s.along_x * ry - s.along_y * rx;
     if (s.triangle && side >= 0) return cost;
-    const double alpha = weights_.alpha;
     if (fr.flight) [[unlikely]] {
       const Quadratic& r = flight_[static_cast<std::size_t>(frame)];
+      const double alpha = flight_alpha_;
       cost.value += alpha * kg::retime::evaluate(r, a, b);
       cost.d_a += alpha * (2 * r[1] * a + r[2] * b + r[4]);
       cost.d_b += alpha * (2 * r[0] * b + r[2] * a + r[3]);
       return cost;
     }
+    const double alpha = weights_.alpha;
     // The nearest point: nearest_from_edge's first step on the facing edge (the same arithmetic),
     // which nearly always concludes (the foot on the edge, or one of its ends), else the walk.
     double gap_x = 0, gap_y = 0;
@@ -297,7 +300,7 @@ BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot
   hint = sector;
   const HullPoint c = closest_point(hull, x, hint);
   out.feasibility = hull.status == HullStatus::Flight
-                        ? weights_.alpha * kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
+                        ? flight_alpha_ * kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
                         : weights_.alpha * c.distance_squared;
   out.inside = c.distance_squared <= tolerance * tolerance;
   return out;

@@ -87,7 +87,10 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
   ClipRetime out;
   out.torque_scale = torque_scale(skeleton, original);
   const BakedObjective objective(hulls, torques, targets, skeleton, fps,
-                                 {.alpha = options.alpha, .beta = options.beta, .torque_scale = out.torque_scale});
+                                 {.alpha = options.alpha,
+                                  .beta = options.beta,
+                                  .torque_scale = out.torque_scale,
+                                  .flight = options.flight_weight});
 
   std::vector<Polygon> polygons;
   auto time_optimal_playback = [&] {

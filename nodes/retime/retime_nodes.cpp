@@ -297,6 +297,7 @@ class RetimeNode final : public graph::Node {
     options_.mode = p.get<std::string>("mode") == "time_optimal" ? RetimeMode::TimeOptimal : RetimeMode::Optimise;
     options_.alpha = p.get<double>("alpha");
     options_.beta = p.get<double>("beta");
+    options_.flight_weight = p.get<double>("flight_weight");
     options_.solve.knot_spacing = options_.time_optimal.knot_spacing = p.get<double>("knot_spacing");
     options_.inside_tolerance = p.get<double>("inside_tolerance");
     if (duration_ > 0 && duration_ / options_.solve.knot_spacing > kMaxSegments)
@@ -454,6 +455,13 @@ NodeType retime_node_type() {
            .type = ParamType::Float,
            .default_value = 1.0,
            .doc = "weight of the squared torque error, in units of the source's RMS joint torque",
+           .min = 0.0,
+           .max = 1e12},
+          {.name = "flight_weight",
+           .type = ParamType::Float,
+           .default_value = 1.0,
+           .doc = "multiplies alpha on flight frames: above 1, when no timing meets every hull, the flight keeps "
+                  "its speed (a wrong gravity shows at once) and the ground phases take the excess",
            .min = 0.0,
            .max = 1e12},
           {.name = "knot_spacing",

@@ -286,6 +286,21 @@ TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every se
   CHECK(no_alpha.flight_excess(20, 0, 1.5) == Approx(0.25));
   CHECK_FALSE(objective.parts(20, 0, 1.5).inside);
   CHECK(objective.parts(20, 0, 1.5).feasibility == Approx(0.25));
+  // The flight weight multiplies α on flight frames only, value and gradient alike.
+  const BakedObjective flight_heavy(c.hulls, c.torques, c.targets, c.skeleton, 30,
+                                    {.alpha = 1, .beta = 2, .torque_scale = 0.5, .flight = 7});
+  CHECK(flight_heavy.parts(20, 0, 1.5).feasibility == Approx(7 * 0.25));
+  CHECK(flight_heavy.parts(20, 0, 1.5).torque == Approx(objective.parts(20, 0, 1.5).torque));
+  CHECK(flight_heavy.parts(3, 30, 40).feasibility == Approx(objective.parts(3, 30, 40).feasibility));
+  CHECK(objective.parts(3, 30, 40).feasibility > 0);
+  int h0 = 0, h1 = 0;
+  const double p20 = 20.0 / 30;
+  const SampleCost light = objective.evaluate(p20, 0.5, 1.5, h0), heavy = flight_heavy.evaluate(p20, 0.5, 1.5, h1);
+  const Eigen::VectorXd tau = c.torques[20].at(1.5, 0.5, c.hulls.gravity);
+  const double torque = 2 * tau.squaredNorm() / 0.25;
+  CHECK(heavy.value - torque == Approx(7 * (light.value - torque)));
+  CHECK_THROWS_WITH(BakedObjective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.flight = -1}),
+                    Catch::Contains("flight weight"));
 }
 
 TEST_CASE("retiming a clip with a flight to a shorter duration keeps the flight at source speed") {

@@ -13,7 +13,7 @@
 // least value, where r is the root's residual (what nothing could supply: zero on a ballistic
 // path) and W the body's weight, so a flight played too fast or slow costs what the wrong gravity
 // costs, and the direction the rows hardly determine (p̈ at the apex) costs little. It is a
-// quadratic too, baked like the torque term.
+// quadratic too, baked like the torque term, weighted α times ObjectiveWeights::flight.
 //
 //   BakedObjective objective(hulls, torques, targets, {.alpha = 1000, .beta = 1, .torque_scale = s});
 //   int hint = 0;
@@ -49,6 +49,14 @@ struct ObjectiveWeights {
   double alpha = 1000;       // feasibility: per (plane unit)² of distance to the hull
   double beta = 1;           // torque: per (τ_scale)² of torque error
   double torque_scale = 1;   // N m (> 0)
+  // Multiplies α on flight frames (>= 0). A flight played at the wrong speed shows a wrong
+  // gravity, which viewers notice at once (Reitsma & Pollard 2003, sensitivity to errors in
+  // ballistic motion); a ground phase a little beyond its hull does not show as plainly. When no
+  // timing meets every hull (a duration shorter than the shortest feasible), this says which
+  // gives: above 1 the flight keeps its speed and the ground phases take the excess. Frames at
+  // takeoff and landing, whose least-squares points an impulse moves, weigh as much, so large
+  // values let them pull their neighbours.
+  double flight = 1;
 };
 
 // The generalised forces of the original timing (0, 1) with the centre's contact forces, per frame
@@ -79,7 +87,7 @@ class BakedObjective final : public PathObjective {
   // The two parts of one frame's integrand at (p̈, ṗ²), and whether the point lies in its hull
   // (within `tolerance` plane units).
   struct Parts {
-    double feasibility = 0;  // α |q − c|²
+    double feasibility = 0;  // α |q − c|² (flight: α · flight · the excess)
     double torque = 0;       // β |τ − τ'|² / τ_scale²
     bool inside = false;
   };
@@ -90,7 +98,7 @@ class BakedObjective final : public PathObjective {
   // even the least-squares point leaves more (a contact the detection missed). For a feasible
   // frame, the hull's vertices; for an infeasible one, empty (no timing of it is physical).
   Polygon admissible_region(int frame, double tolerance, int sides = 16, double extent = 100) const;
-  // For a flight frame, (|r|² − least |r|²) / W² at (p̈, ṗ²), whatever α; 0 for other frames.
+  // For a flight frame, (|r|² − least |r|²) / W² at (p̈, ṗ²), whatever the weights; 0 for other frames.
   double flight_excess(int frame, double pddot, double pdot_squared) const {
     return kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared);
   }
@@ -130,6 +138,7 @@ class BakedObjective final : public PathObjective {
   const Hulls& hulls_;
   double fps_;
   ObjectiveWeights weights_;
+  double flight_alpha_ = 0;  // weights_.alpha * weights_.flight
   int last_frame_ = 0;
   std::vector<FrameData> frames_;
   std::vector<SectorData> sectors_;        // every frame's fan sectors, frame after frame

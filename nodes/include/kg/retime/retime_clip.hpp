@@ -43,6 +43,7 @@ struct ClipRetimeOptions {
   TorqueTarget target = TorqueTarget::Original;
   double alpha = 1000;              // feasibility weight (ObjectiveWeights)
   double beta = 1;                  // torque weight
+  double flight_weight = 1;         // multiplies alpha on flight frames (ObjectiveWeights::flight)
   double inside_tolerance = 0.01;   // plane units: a timing this close to its hull counts as inside
   TimeOptimalOptions time_optimal{};
 };
