@@ -444,6 +444,15 @@ TEST_CASE("the graphs of graphs/retime/ reproduce the paper's experiments on the
     }
   }
 
+  // fig. 1: half the duration is a little shorter than any feasible timing of 16_01 (about 0.54
+  // of it); the flight, weighted above the ground phases, keeps close to its source speed (a
+  // uniform halving would play it in half the time).
+  const Flight half = interior_flight(read_forces(files["forces@jump_half"]));
+  INFO("jump_half flight: source " << half.source << " s, output " << half.output << " s");
+  REQUIRE(half.frames >= 8);
+  CHECK(half.output > 0.9 * half.source);
+  CHECK(half.output < 1.1 * half.source);
+
   // fig. 8: the pinned moment plays when asked (output 1.0 s is output frame 30).
   const auto pinned = read_curves(files["curves@jump_pin"]);
   REQUIRE(pinned.size() > 30);
