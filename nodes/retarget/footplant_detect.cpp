@@ -168,7 +168,8 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
     for (int f = 0; f < frames; ++f) heights[i][static_cast<std::size_t>(f)] = at(f, i).y();
   }
   std::vector<double> rest(np, 0.0);
-  for (std::size_t i = 0; i < np; ++i) rest[i] = percentile(heights[i], o.floor_percentile);
+  const bool rest_on_floor = o.rest_on_floor && !std::isnan(o.floor);
+  for (std::size_t i = 0; i < np; ++i) rest[i] = rest_on_floor ? o.floor : percentile(heights[i], o.floor_percentile);
   if (std::isnan(o.floor)) {
     d.floor = np == 0 || frames == 0 ? 0.0 : *std::min_element(rest.begin(), rest.end());
     std::ostringstream note;
@@ -225,7 +226,7 @@ FootplantDetection detect_footplants(const motion::Motion& m, const FootplantOpt
     // The rest level: the point's own low percentile, or its lowest height within the window
     // around each frame (floors that slope or drift between steps).
     std::vector<double> base(static_cast<std::size_t>(frames), d.points[i].rest_height);
-    if (half_window > 0)
+    if (half_window > 0 && !rest_on_floor)
       for (int f = 0; f < frames; ++f) {
         double low = kInf;
         for (int g = std::max(0, f - half_window); g <= std::min(frames - 1, f + half_window); ++g)

@@ -146,7 +146,9 @@ NodeType contacts_type() {
           ParamSpec{.name = "floor",
                     .type = ParamType::String,
                     .default_value = std::string("auto"),
-                    .doc = "floor height in metres, or 'auto'"},
+                    .doc =
+                        "floor height in metres (the soles touch within height_threshold of it), or 'auto' "
+                        "(each sole point's own lowest heights: captured floors slope and drift)"},
       }};
   return {spec, [](const Params& p) { return std::make_unique<ContactsNode>(p); }};
 }

@@ -337,6 +337,9 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   c.notes = std::move(notes);
   for (const std::string& n : d.notes)
     if (n.rfind("floor", 0) == 0) c.notes.push_back(n);
+  if (!d.floor_estimated)
+    c.notes.push_back("floor (given): " + fmt(d.floor) + " m: the soles touch within " +
+                      fmt(o.plants.height_threshold) + " m of it");
   return c;
 }
 

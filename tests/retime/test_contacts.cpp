@@ -480,3 +480,31 @@ TEST_CASE("The retime.contacts node", "[contacts][nodes]") {
     CHECK(ctx.logged("foot lfoot: heel on lfoot, tip on ltoes"));
   }
 }
+
+TEST_CASE("A given floor is where the soles touch", "[contacts]") {
+  const std::string asf = kData + "/cmu/asf_amc/16.asf", amc = kData + "/cmu/asf_amc/16_15.amc";
+  if (!std::filesystem::exists(asf) || !std::filesystem::exists(amc)) {
+    WARN("skipped: " << amc << " or " << asf << " not found");
+    return;
+  }
+  const motion::Motion walk = motion::resample(io::import_asf_amc(asf, amc, {}).motion, 30);
+  auto touching_frames = [](const Contacts& c) {
+    int n = 0;
+    for (const ContactFrame& f : c.frames) n += !f.points.empty();
+    return n;
+  };
+  const Contacts automatic = detect_contacts(walk, {});
+  REQUIRE(touching_frames(automatic) == automatic.frame_count());  // a walk always has a foot down
+  FootContactOptions at_floor;
+  at_floor.plants.floor = 0.0026;  // the estimate's value, given
+  CHECK(touching_frames(detect_contacts(walk, at_floor)) >= automatic.frame_count() - 2);
+  // Half a metre below the feet: no sole comes near it.
+  FootContactOptions below;
+  below.plants.floor = -0.5;
+  const Contacts none = detect_contacts(walk, below);
+  INFO(describe(none));
+  CHECK(touching_frames(none) == 0);
+  CHECK(std::any_of(none.notes.begin(), none.notes.end(), [](const std::string& n) {
+    return n.find("floor (given): -0.5 m") != std::string::npos;
+  }));
+}

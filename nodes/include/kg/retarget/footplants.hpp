@@ -44,6 +44,10 @@ struct FootplantOptions {
   int min_duration_frames = 3;     // and spans of fewer frames than this
   double floor = std::numeric_limits<double>::quiet_NaN();  // m; NaN: estimated
   double floor_percentile = 0.05;  // in [0, 0.5]
+  // With a given floor, every point's rest level is the floor itself instead of its own low
+  // heights: for points on the sole (a foot's contact vertices), whose planted height is the
+  // floor's. Ignored when the floor is estimated.
+  bool rest_on_floor = false;
   double trim_distance = 0.01;     // m: a plant's end frames farther than this from its median
                                    // position are trimmed off (0: no trimming)
   double rest_window_s = 1.0;      // s, >= 0 (0: one rest level per point for the whole clip)
@@ -53,7 +57,8 @@ struct FootplantOptions {
 struct PlantPoint {
   std::string name;  // "LeftToeBase/end", "LeftFoot"
   PointRef point;
-  double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest level)
+  double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest
+                           // level), or the given floor (rest_on_floor)
   std::vector<double> heights{};  // m, world: its height at every frame of the motion
   // m, world: at every frame, the level its height is measured above to detect plants (its
   // lowest height within rest_window_s around the frame, or rest_height).

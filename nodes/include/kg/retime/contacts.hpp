@@ -117,8 +117,10 @@ struct FootContactOptions {
   // frames of a landing's impact and of a takeoff's last push, where feet still strike or slide,
   // are not taken for flight. 0: off (>= 0, m/s²).
   double support_acceleration = 4.9;
+  // A given floor (plants.floor) is where the heel and tip points rest (rest_on_floor).
   retarget::FootplantOptions plants = [] {
     retarget::FootplantOptions o;
+    o.rest_on_floor = true;
     o.trim_distance = 0.0;
     o.speed_threshold = 0.3;
     return o;
