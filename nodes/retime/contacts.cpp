@@ -66,10 +66,19 @@ std::pair<int, Eigen::Vector3d> toe_tip(const motion::Skeleton& sk, int foot) {
                               "' has neither a child (toe) nor an End Site to find its tip");
 }
 
+// Marks the pair of foot vertices that detection point `point` watches as touching in `on` (one
+// frame's activity): point 2 foot is the heel (vertices 3 and 0 of that foot), 2 foot + 1 the tip
+// (vertices 1 and 2).
+void activate_pair(std::vector<bool>& on, std::size_t point) {
+  const std::size_t foot = point / 2;
+  const bool is_tip = point % 2 == 1;
+  on[4 * foot + (is_tip ? 1 : 0)] = true;
+  on[4 * foot + (is_tip ? 2 : 3)] = true;
+}
+
 // FootContactOptions::support_acceleration: in each run of frames without any active vertex
 // that a plant bounds, from that end inwards and for as long as the root is held up, activates the
-// heel or tip pair (vertices 3, 0 or 1, 2 of each foot) of every detection point d.points[2 foot]
-// (heel) and [2 foot + 1] (tip) within the leave height. Only next to plants: a figure gliding
+// pair of every detection point within the leave height. Only next to plants: a figure gliding
 // over the floor without ever planting is not taken for one standing. Returns the frames it gave
 // contact.
 int touch_where_supported(const motion::Motion& m, const retarget::FootplantDetection& d,
@@ -106,10 +115,7 @@ int touch_where_supported(const motion::Motion& m, const retarget::FootplantDete
       const retarget::PlantPoint& point = d.points[i];
       const std::size_t at = static_cast<std::size_t>(f);
       if (point.heights[at] - point.rest_levels[at] > leave) continue;
-      const std::size_t foot = i / 2;
-      const bool is_tip = i % 2 == 1;
-      on[4 * foot + (is_tip ? 1 : 0)] = true;
-      on[4 * foot + (is_tip ? 2 : 3)] = true;
+      activate_pair(on, i);
       touched = true;
     }
     return touched;
@@ -318,15 +324,9 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   const int frames = m.frame_count();
   std::vector<std::vector<bool>> active(static_cast<std::size_t>(frames),
                                         std::vector<bool>(4 * feet.size(), false));
-  for (const retarget::Footplant& plant : d.plants) {
-    const std::size_t foot = static_cast<std::size_t>(plant.point) / 2;
-    const bool is_tip = plant.point % 2 == 1;
-    for (int f = plant.first_frame; f <= plant.last_frame; ++f) {
-      std::vector<bool>& on = active[static_cast<std::size_t>(f)];
-      on[4 * foot + (is_tip ? 1 : 0)] = true;
-      on[4 * foot + (is_tip ? 2 : 3)] = true;
-    }
-  }
+  for (const retarget::Footplant& plant : d.plants)
+    for (int f = plant.first_frame; f <= plant.last_frame; ++f)
+      activate_pair(active[static_cast<std::size_t>(f)], static_cast<std::size_t>(plant.point));
   const int supported = touch_where_supported(m, d, o, active);
   if (supported > 0)
     notes.push_back(std::to_string(supported) +
