@@ -1,5 +1,5 @@
 // The synthesized standing jump (synthesize.hpp): stand, countermovement, push-off onto the balls
-// of the feet, exact ballistic flight of the root, landing on the balls, heels down, absorbing
+// of the feet, a flight whose centre of mass falls freely, landing on the balls, heels down, absorbing
 // crouch, stand.
 #include <algorithm>
 #include <cmath>
@@ -8,6 +8,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "kg/retime/body_build.hpp"
 #include "kg/synth/synthesize.hpp"
 #include "synth_detail.hpp"
 
@@ -367,9 +368,42 @@ Synthesis synthesize_jump(const JumpOptions& options) {
   }
   const double t_heel = plan.t_heel, t_off = plan.t_off, t_land = plan.t_land, end = plan.end;
 
+  // In flight the whole body, not the root, must fall freely: the limbs tuck and reach relative
+  // to the root, which moves the centre of mass about it. So the flying body is translated by
+  // the difference between the ballistic parabola through the centre of mass at takeoff and at
+  // touchdown and the centre of mass the plan gives (a rigid shift: legs and arms keep their
+  // joint angles). The shift fades in over the first `ramp` seconds of the flight and out over the
+  // last, without a kink: the feet leave and meet the floor at rest, and a shift changing at once
+  // would push them through it. The mass model is retime.body_model's default (de Leva's male
+  // table), as the retiming sees it.
+  const retime::BodyModel body = [&] {
+    const Eigen::RowVectorXd rest = retime::rest_pose_values(*fig.skeleton);
+    return retime::build_body_model(fig.skeleton, {}, &rest).body;
+  }();
+  Eigen::RowVectorXd values(fig.skeleton->channel_count());
+  auto com_of = [&](const BodyPose& p) {
+    writer.write(p, values.data());
+    return retime::body_com(body, values);
+  };
+  const double flight_time = t_land - t_off;
+  const Eigen::Vector3d com_off = com_of(plan.pose(t_off)), com_land = com_of(plan.pose(t_land));
+  const Eigen::Vector3d down(0, -g, 0);
+  const Eigen::Vector3d com_velocity =
+      (com_land - com_off - 0.5 * down * flight_time * flight_time) / flight_time;
+  const double ramp = std::min(0.04, 0.15 * flight_time);
+  auto pose_at = [&](double t) {
+    BodyPose p = plan.pose(t);
+    if (t <= t_off || t >= t_land) return p;
+    const double s = t - t_off, edge = std::min(s, t_land - t) / ramp;
+    const double fade = edge >= 1 ? 1 : edge * edge * (3 - 2 * edge);
+    const Eigen::Vector3d shift = fade * (com_off + com_velocity * s + 0.5 * down * s * s - com_of(p));
+    p.root += shift;
+    for (Side side : {kLeft, kRight}) p.feet[side].ankle += shift;
+    return p;
+  };
+
   const int frames = static_cast<int>(std::lround(end * options.fps)) + 1;
-  out.max_leg_extension = write_frames(
-      writer, fig, [&](double t) { return plan.pose(t); }, frames, options.fps, "synth_jump", out.motion);
+  out.max_leg_extension = write_frames(writer, fig, pose_at, frames, options.fps, "synth_jump", out.motion);
   if (out.max_leg_extension > 0.999)
     throw std::logic_error("synthesize_jump: the legs cannot follow the planned jump");
 

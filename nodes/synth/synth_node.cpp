@@ -84,7 +84,7 @@ graph::NodeType synthesize_type() {
           "captured data. walk: starts standing, takes `steps` steps along +Z at `speed` (step length and "
           "cadence from a walk-ratio gait relation), ends standing with the feet together; heel strike, "
           "foot flat, heel off, toe off, pelvis bob/sway/rotation, arm swing. jump: countermovement, "
-          "push-off, ballistic flight of the root (y = y0 + v0 t - g t^2/2), landing and absorbing crouch. "
+          "push-off, a flight whose centre of mass (de Leva's masses) is ballistic, landing and absorbing crouch. "
           "climb: stands on the first rung of a vertical ladder `ladder_distance` ahead (rungs every "
           "`rung_spacing`, rails at +-`rail_half_width`) and climbs `steps` rungs one limb at a time, feet "
           "passing each other, hands on the rails, every hold exact (Gleicher 1998 7.2 had such a clip). "

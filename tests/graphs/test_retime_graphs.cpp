@@ -376,6 +376,19 @@ TEST_CASE("graphs/demo.yaml retimes its synthesized jump to half its duration", 
   CHECK(first <= std::ceil(synth.flight_start * kFps) + 1);
   CHECK(last <= std::ceil(synth.flight_end * kFps));
   CHECK(last >= std::floor(synth.flight_end * kFps) - 1);
+
+  // Its centre of mass flies ballistically, so its flight frames' least-squares points are the
+  // source timing (0, 1), but for the frames where the shift fades in and out; and the flight,
+  // weighted above the ground phases, plays at its own speed.
+  int at_source = 0;
+  for (const ForceFrame& f : forces)
+    if (f.status == "flight") at_source += (f.point - Eigen::Vector2d(0, 1)).norm() < 0.15;
+  INFO("flight frames whose point is within 0.15 of (0, 1): " << at_source << " of " << count);
+  CHECK(at_source >= count - 4);
+  const Flight flight = interior_flight(forces);
+  INFO("flight: source " << flight.source << " s, output " << flight.output << " s");
+  CHECK(flight.output > 0.9 * flight.source);
+  CHECK(flight.output < 1.1 * flight.source);
 }
 
 TEST_CASE("every graph in graphs/retime/ validates", "[graphs][retime]") {

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "kg/retime/body_build.hpp"
 #include "synth_test_util.hpp"
 
 using namespace kg;
@@ -23,44 +24,48 @@ std::pair<int, int> flight_frames(const Synthesis& s) {
 
 }  // namespace
 
-TEST_CASE("jump: the root flies exactly ballistically", "[synth][jump]") {
+TEST_CASE("jump: the body's centre of mass flies exactly ballistically", "[synth][jump]") {
   for (const JumpOptions& o : {JumpOptions{}, JumpOptions{.height = 0.5, .distance = 1.6},
                                JumpOptions{.height = 0.2, .distance = 0, .fps = 240},
                                JumpOptions{.height = 0.3, .distance = 0.5, .gravity = 3.71}}) {
     CAPTURE(o.height, o.distance, o.fps, o.gravity);
     const Synthesis s = synthesize_jump(o);
     const Kinematics k(s.motion);
-    const int root = s.figure.hips;
-    const auto [f0, f1] = flight_frames(s);
+    // The mass model the synthesizer and retime.body_model share by default (de Leva, male).
+    const Eigen::RowVectorXd rest = retime::rest_pose_values(*s.motion.skeleton);
+    const retime::BodyModel body = retime::build_body_model(s.motion.skeleton, {}, &rest).body;
+    auto com = [&](int f) { return retime::body_com(body, s.motion.values.row(f)); };
+    // The shift that makes it so fades in and out within 15% of the flight at either end.
+    const double fps = s.motion.fps, flight = s.flight_end - s.flight_start;
+    const int f0 = int(std::ceil((s.flight_start + 0.15 * flight) * fps)) + 1;
+    const int f1 = int(std::floor((s.flight_end - 0.15 * flight) * fps)) - 1;
     REQUIRE(f1 - f0 > 10);
-    const double dt = 1 / s.motion.fps;
-    double worst_rel = 0, worst_z = 0;
-    double y_max = -1e9;
-    for (int f = f0 + 1; f < f1; ++f) {
-      const double ay =
-          (k.joint(f + 1, root).y() - 2 * k.joint(f, root).y() + k.joint(f - 1, root).y()) / (dt * dt);
-      const double az =
-          (k.joint(f + 1, root).z() - 2 * k.joint(f, root).z() + k.joint(f - 1, root).z()) / (dt * dt);
-      worst_rel = std::max(worst_rel, std::abs(ay + o.gravity) / o.gravity);
-      worst_z = std::max(worst_z, std::abs(az));
-      y_max = std::max(y_max, k.joint(f, root).y());
+    const double dt = 1 / fps;
+    double worst_rel = 0, worst_horizontal = 0, root_worst = 0;
+    for (int f = f0; f <= f1; ++f) {
+      const Eigen::Vector3d a = (com(f + 1) - 2 * com(f) + com(f - 1)) / (dt * dt);
+      worst_rel = std::max(worst_rel, std::abs(a.y() + o.gravity) / o.gravity);
+      worst_horizontal = std::max({worst_horizontal, std::abs(a.x()), std::abs(a.z())});
+      const double root_ay = (k.joint(f + 1, s.figure.hips).y() - 2 * k.joint(f, s.figure.hips).y() +
+                              k.joint(f - 1, s.figure.hips).y()) /
+                             (dt * dt);
+      root_worst = std::max(root_worst, std::abs(root_ay + o.gravity));
     }
-    INFO("vertical acceleration off -g by at most " << worst_rel << " (relative); horizontal " << worst_z
-                                                    << " m/s^2");
+    INFO("centre of mass: vertical acceleration off -g by at most "
+         << worst_rel << " (relative); horizontal " << worst_horizontal << " m/s^2; the root's off -g by "
+         << root_worst << " m/s^2");
     CHECK(worst_rel < 1e-6);
-    CHECK(worst_z < 1e-6 * o.gravity);
-    // Flight time and apex agree with the takeoff velocity.
+    CHECK(worst_horizontal < 1e-6 * o.gravity);
+    // The root is not ballistic: the limbs tuck and reach about it.
+    CHECK(root_worst > 0.05 * o.gravity);
     CHECK(s.takeoff_velocity_up == Approx(std::sqrt(2 * o.gravity * o.height)));
-    const double y_off = k.joint(f0, root).y() - s.takeoff_velocity_up * (f0 * dt - s.flight_start) +
-                         o.gravity / 2 * std::pow(f0 * dt - s.flight_start, 2);
-    CHECK(y_max <= y_off + o.height + 1e-9);
-    CHECK(y_max > y_off + o.height - o.gravity * dt * dt);
     // Both feet off the floor all through the flight, well clear at its middle.
+    const auto [g0, g1] = flight_frames(s);
     double lowest = 1e9;
-    for (int f = f0; f <= f1; ++f)
+    for (int f = g0; f <= g1; ++f)
       for (Side side : {kLeft, kRight}) lowest = std::min(lowest, sole(k, s.figure, f, side).lowest());
     CHECK(lowest > 0);
-    const int mid = (f0 + f1) / 2;
+    const int mid = (g0 + g1) / 2;
     for (Side side : {kLeft, kRight}) CHECK(sole(k, s.figure, mid, side).lowest() > 0.1);
   }
 }

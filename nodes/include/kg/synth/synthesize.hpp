@@ -15,14 +15,17 @@
 // alongside; the pelvis accelerates to `speed` over the first step time and stops as the last
 // foot lands.
 //
-// How (jump): stand, countermovement crouch, push-off onto the balls of the feet, a flight in which
-// the root's height is exactly y(t) = y0 + v0 t - g t^2 / 2 and its forward position linear,
-// landing on the balls of both feet, heels down, absorbing crouch, stand. Root curves are quintic
-// in the ground phases, matching position, velocity and acceleration (-g) at takeoff and landing.
-// The takeoff and landing leg geometry (the body leans with the forward speed) fixes the takeoff
-// and landing heights, hence the flight time and the forward speed; feet leave and land at rest,
-// and in between move relative to the root (tucked at 45 % of the flight). The root's height
-// and forward position are ballistic; its orientation is not (the trunk keeps moving).
+// How (jump): stand, countermovement crouch, push-off onto the balls of the feet, a flight, landing
+// on the balls of both feet, heels down, absorbing crouch, stand. The plan's root flies
+// y(t) = y0 + v0 t - g t^2 / 2, forward position linear; root curves are quintic in the ground
+// phases, matching position, velocity and acceleration (-g) at takeoff and landing. The takeoff
+// and landing leg geometry (the body leans with the forward speed) fixes the takeoff and landing
+// heights, hence the flight time and the forward speed; feet leave and land at rest, and in
+// between move relative to the root (tucked at 45 % of the flight). Since the limbs move about the
+// root, the flying body is then shifted rigidly so that its centre of mass (retime.body_model's
+// default mass model, de Leva's male table) follows the ballistic parabola through its takeoff and
+// touchdown positions exactly, the shift fading in and out within the flight's first and last 15 %
+// (at most 0.04 s). Its orientation is not ballistic (the trunk keeps moving).
 //
 // How (climb, Gleicher 1998 7.2 has a ladder clip; we have none): a vertical ladder stands in the
 // plane z = ladder_distance in front of the figure, rungs every rung_spacing metres (the first one
@@ -161,8 +164,8 @@ struct Synthesis {
   // between them; empty span for fewer than 3 steps). Jump: takeoff and touchdown.
   double steady_start = 0, steady_end = 0;
   double flight_start = 0, flight_end = 0;  // jump: takeoff and landing; walk: 0
-  double takeoff_velocity_up = 0;           // jump: root's vertical velocity at takeoff, m/s
-  double takeoff_velocity_forward = 0;      // jump: root's forward (+Z) velocity, m/s
+  double takeoff_velocity_up = 0;           // jump: the plan's root vertical velocity at takeoff, m/s
+  double takeoff_velocity_forward = 0;      // jump: the plan's root forward (+Z) velocity, m/s
   double gravity = 0;                       // jump: m/s^2
   // Largest hip-to-ankle distance over the legs' full length (thigh + shank) in any frame; below
   // 1, so the knee never locks straight (the IK stays smooth).
