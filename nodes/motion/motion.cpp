@@ -29,4 +29,15 @@ void Motion::check() const {
       }
 }
 
+Motion frame_range(const Motion& motion, int first, int last) {
+  const int frames = motion.frame_count();
+  const int end = last == -1 ? frames - 1 : last;
+  if (first < 0 || end >= frames || first > end || last < -1)
+    throw std::invalid_argument("motion '" + motion.name + "': frames " + std::to_string(first) + " to " +
+                                (last == -1 ? "the last" : std::to_string(last)) + " of its " +
+                                std::to_string(frames) + " (expected 0 <= first <= last < " +
+                                std::to_string(frames) + "; last -1: the last frame)");
+  return {motion.skeleton, motion.values.middleRows(first, end - first + 1), motion.fps, motion.name};
+}
+
 }  // namespace kg::motion

@@ -110,3 +110,37 @@ TEST_CASE("motion.resample fails clearly on bad params and inputs", "[nodes]") {
   CHECK_THROWS_WITH(node->run(bad_clip), Catch::Contains("frame 3, channel root.Xrotation is nan"));
   CHECK(bad_clip.outputs.empty());
 }
+
+TEST_CASE("motion.frame_range keeps a range of frames; frame_range refuses ranges outside the clip",
+          "[nodes]") {
+  const graph::Registry registry = kg::test::registry_of(motion_node_types());
+  const motion::Motion m = clip(10, 120);
+  auto run = [&](std::int64_t first, std::int64_t last) {
+    return kg::test::run_node(
+        registry, "motion.frame_range",
+        kg::test::params_for(registry, "motion.frame_range", {{"first", first}, {"last", last}}),
+        {{"motion", graph::Value::make(m)}});
+  };
+  const NodeContext without_first = run(1, -1);
+  const motion::Motion& out = without_first.outputs.at("motion").get<motion::Motion>();
+  REQUIRE(out.frame_count() == 9);
+  CHECK(out.values.row(0) == m.values.row(1));
+  CHECK(out.values.row(8) == m.values.row(9));
+  CHECK(out.fps == 120);
+  CHECK(out.skeleton == m.skeleton);
+  CHECK(std::get<std::int64_t>(without_first.figures.at("frames_out")) == 9);
+  const motion::Motion middle = motion::frame_range(m, 3, 5);
+  REQUIRE(middle.frame_count() == 3);
+  CHECK(middle.values.row(2) == m.values.row(5));
+  CHECK(motion::frame_range(m, 9, 9).frame_count() == 1);
+  CHECK_THROWS_WITH(motion::frame_range(m, 4, 10),
+                    Catch::Contains("of its 10") && Catch::Contains("0 <= first <= last < 10"));
+  CHECK_THROWS_WITH(motion::frame_range(m, 6, 5), Catch::Contains("frames 6 to 5"));
+  CHECK_THROWS(motion::frame_range(m, -1, 5));
+  CHECK_THROWS_WITH(run(12, -1), Catch::Contains("of its 10"));
+  CHECK_THROWS_WITH(
+      kg::test::node_type(registry, "motion.frame_range")
+          .create(kg::test::params_for(registry, "motion.frame_range",
+                                       {{"first", std::int64_t{5}}, {"last", std::int64_t{2}}})),
+      Catch::Contains("last 2 before first 5"));
+}

@@ -8,7 +8,7 @@
 
 namespace kg {
 
-std::vector<graph::NodeType> motion_node_types();  // motion.resample, ... (nodes/motion)
+std::vector<graph::NodeType> motion_node_types();  // motion.resample, motion.frame_range (nodes/motion)
 std::vector<graph::NodeType> bvh_node_types();     // io.import_bvh, io.export_bvh (nodes/io)
 std::vector<graph::NodeType> asf_amc_node_types(); // io.import_asf_amc, io.import_motion (nodes/io)
 std::vector<graph::NodeType> synth_node_types();   // motion.synthesize (nodes/synth)

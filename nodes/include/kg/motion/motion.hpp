@@ -29,6 +29,11 @@ struct Motion {
   void check() const;
 };
 
+// Frames `first` to `last` of `motion` (0-based, inclusive; last -1: the clip's last frame), same
+// skeleton, rate and name: e.g. without the T-pose Daz and iClone exports put first. Throws
+// std::invalid_argument naming the clip's frame count for a range outside it or reversed.
+Motion frame_range(const Motion& motion, int first, int last = -1);
+
 }  // namespace kg::motion
 
 KG_DECLARE_TYPE(kg::motion::Skeleton, "kg.Skeleton")
