@@ -19,11 +19,13 @@
 //      Bake         the BakedObjective constructor over the clip (sector torques and the six
 //                   coefficients of every sector, the flight terms), divided by the frames;
 //      Obj          BakedObjective::evaluate (value and gradient) at every sample of the retimer's
-//                   grid (at least 4 per source frame at the fastest playback: grid_samples) along
-//                   the warp the retimer returns for 0.8 times the clip's duration, in order with
-//                   the retimer's sector hint; the time of the whole grid divided by the source
-//                   frames. "Per frame" thus covers every sample falling in one source frame (the
-//                   samples per frame are printed); per evaluation is printed below the table;
+//                   final grid (RetimeResult::grid: per spline segment, at least 4 samples per
+//                   source frame at that segment's fastest playback, sample_grid, refined where the
+//                   solve sped a segment up) along the warp the retimer returns for 0.8 times the
+//                   clip's duration, in order with the retimer's sector hint; the time of the whole
+//                   grid divided by the source frames. "Per frame" thus covers every sample falling
+//                   in one source frame (the samples per frame are printed); per evaluation is
+//                   printed below the table;
 //      NP-Obj       the same integrand and gradient without baking: per evaluation and per channel
 //                   τ = t0 + Ta p̈ + Tb ṗ² from the sector's torques (sector_torques, precomputed per
 //                   sector, not reduced to six coefficients) and its squared error; the feasibility
@@ -347,15 +349,13 @@ void prepare_problem(Case& c) {
       .alpha = options.alpha, .beta = options.beta, .torque_scale = retime::torque_scale(s, c.targets)};
   c.solution = retime::retime_clip(c.hulls, c.torques, c.clip.fps, options, s);
   const retime::TimeWarp& warp = c.solution.warp;
-  const int n = retime::grid_samples(warp, c.clip.fps, options.solve.samples_per_frame);
-  const double dt = warp.duration / (n - 1);
   c.first_sample.assign(static_cast<std::size_t>(frames) + 1, 0);
-  for (int k = 0; k < n; ++k) {
-    const retime::WarpSample w = warp.sample(k * dt);
+  retime::for_each_sample(c.solution.solve.grid, warp.duration, [&](double t, double) {
+    const retime::WarpSample w = warp.sample(t);
     c.samples.push_back({w.p, w.pddot, w.pdot * w.pdot});
     const int f = std::clamp(static_cast<int>(w.p * c.clip.fps), 0, frames - 1);
     ++c.first_sample[static_cast<std::size_t>(f) + 1];
-  }
+  });
   for (int f = 0; f < frames; ++f)
     c.first_sample[static_cast<std::size_t>(f) + 1] += c.first_sample[static_cast<std::size_t>(f)];
 }
