@@ -178,6 +178,7 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
   const double barrier = 1e-6 * initial_cost / (segments + 3) + 1e-12;
   Eigen::VectorXd y = basis.transpose() * (start_controls - particular);
   double gradient_scale = 0;  // max-norm of the gradient at the start
+  std::string refinements;    // what each round's grid refinement did, for the message
   for (int round = 0; round < 4; ++round) {
     auto* function = new WarpFunction(objective, warp, particular, basis, grid, barrier);
     ceres::GradientProblem problem(function);  // takes ownership
@@ -204,7 +205,7 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
     result.iterations += static_cast<int>(summary.iterations.size());
     result.evaluations += function->evaluations();
     result.converged = y.size() == 0 || summary.termination_type == ceres::CONVERGENCE;
-    result.message = y.size() == 0 ? "the constraints fix the warp" : summary.message;
+    result.message = (y.size() == 0 ? "the constraints fix the warp" : summary.message) + refinements;
     // Segments the solution plays faster than their steps allow get the steps it needs; the
     // others keep theirs (a grid that only grows cannot cycle).
     const SampleGrid needed = sample_grid(warp, objective.source_fps(), options.samples_per_frame);
@@ -224,8 +225,8 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
                         std::to_string(grid.samples()) + " used)";
       break;
     }
-    result.message += "; grid refined in " + which + " from " + std::to_string(grid.samples()) + " to " +
-                      std::to_string(refined.samples()) + " samples";
+    refinements += "; grid refined in " + which + " from " + std::to_string(grid.samples()) + " to " +
+                   std::to_string(refined.samples()) + " samples";
     grid = std::move(refined);
   }
   result.warp = warp;

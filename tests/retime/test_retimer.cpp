@@ -206,6 +206,10 @@ TEST_CASE("the retimer's final grid has every segment's quarter frames at the so
   CHECK(*std::max_element(r.grid.steps.begin(), r.grid.steps.end()) >=
         1.7 * *std::min_element(r.grid.steps.begin(), r.grid.steps.end()));
   CHECK(r.objective == Approx(integrate(objective, r.warp, r.grid)));
+  // It started uniform at 1.5x: the segments sped up to about 2x were refined, and the message
+  // says so.
+  CHECK(r.samples > sample_grid(TimeWarp::uniform(3.0, 2.0, 20), 30, 4).samples());
+  CHECK_THAT(r.message, Catch::Matchers::Contains(" segments from 361 to "));
 }
 
 TEST_CASE("pins hold exactly after the solve") {

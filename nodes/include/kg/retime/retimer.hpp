@@ -90,7 +90,7 @@ struct RetimeResult {
   int samples = 0;         // samples of the final grid: grid.samples()
   double objective = 0;    // the integral at the solution (barrier excluded)
   double seconds = 0;      // wall time of the solve
-  std::string message;     // Ceres' termination message, and any grid refinement
+  std::string message;     // Ceres' termination message of the last solve, then each grid refinement
 };
 
 // Throws std::invalid_argument naming the option for options out of range (a duration that is
