@@ -1079,11 +1079,25 @@ int main(int argc, char** argv) {
                     c->solution.solve.iterations);
       std::printf("%10s", s);
     }
+    std::printf("\n%-14s", "solve ms");
+    for (const auto& c : cases) std::printf("%10.1f", c->solution.solve.seconds * 1000);
+    // A "!" says why: Ceres' reason, or the grid refined four times without catching up.
+    for (const auto& c : cases)
+      if (!c->solution.solve.converged)
+        std::printf("\n  %s did not converge: %s", c->name.c_str(), c->solution.solve.message.c_str());
     std::printf("\n%-14s", "samples");
     for (const auto& c : cases) std::printf("%10zu", c->samples.size());
     std::printf("\n%-14s", "samples/frame");
     for (const auto& c : cases)
       std::printf("%10.2f", static_cast<double>(c->samples.size()) / c->clip.frame_count());
+    // What sample_grid gives the solution afresh: the grid only grows during a solve, so segments
+    // the solve slowed down keep the steps their starting playback needed.
+    std::printf("\n%-14s", "fewest/frame");
+    for (const auto& c : cases)
+      std::printf("%10.2f", static_cast<double>(retime::sample_grid(c->solution.warp, c->clip.fps,
+                                                                     retime::RetimeOptions{}.samples_per_frame)
+                                                    .samples()) /
+                                c->clip.frame_count());
     std::printf("\nper evaluation (ns):\n");
     for (std::size_t i = 0; i < rows.size(); ++i) {
       if (rows[i].name != "Obj" && rows[i].name != "NP-Obj" && rows[i].name != "Naive") continue;
