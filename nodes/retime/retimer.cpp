@@ -198,6 +198,13 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
     solver_options.gradient_tolerance = options.gradient_tolerance * gradient_scale;
     solver_options.parameter_tolerance = 1e-14;
     solver_options.logging_type = ceres::SILENT;
+    // L-BFGS's starting inverse Hessian is γ I with γ = yᵀs / yᵀy of the latest step rather than
+    // I: the objective's scale (α, β, the clip) then no longer sets the first trial step. On 25
+    // solves of real clips (bench_retime optimiser and jump, and 07_05 and 16_15 at 0.5x to 1.5x)
+    // it took 26% fewer iterations and 39% fewer evaluations, ending 0.1% or more lower in 8 and
+    // higher in 1 (13_11 at 0.5x, flight weight 300: 2.8%; both stop on a step the line search
+    // cannot shorten into a decrease: the integrand has kinks at sector edges).
+    solver_options.use_approximate_eigenvalue_bfgs_scaling = true;
     ceres::GradientProblemSolver::Summary summary;
     if (y.size() > 0) ceres::Solve(solver_options, problem, y.data(), &summary);
     const Eigen::VectorXd c = function->controls(y.data());
