@@ -40,8 +40,9 @@
 // 2. optimiser: retime_clip to 0.8 times the duration of CMU 07_05 (AMC at 120 Hz resampled to
 //    60 Hz: 259 frames) and 16_15 (resampled to 30 Hz: 118 frames), the pipeline of
 //    graphs/retime.yaml (de Leva male 70 kg, detected contacts, smoothing 0.04 s, default hulls,
-//    objective match): iterations, evaluations, solve time (median of 3 solves), the share of
-//    output frames inside their hulls.
+//    objective match): iterations, evaluations, the final grid's samples, the objective the
+//    solve reached (RetimeResult::objective, on that grid), solve time (median of 3 solves), the
+//    share of output frames inside their hulls.
 // 3. jump: the CMU jumps 16_01 (its header says 30 fps, it is 120), 13_11 and 13_13 (Daz BVH)
 //    through the same pipeline at 30 Hz, retimed to 0.5 and 0.65 of their duration, and to 0.5 with
 //    graphs/retime/jump_half.yaml's flight weight (fig. 1's experiment: the flight weighs more than
@@ -752,10 +753,11 @@ Timed retime_timed(const Clip& c, double scale, int runs, double flight_weight =
 void print_retime(const Timed& t, double scale, double duration, double flight_weight = 1) {
   const retime::ClipRetime& r = t.r;
   std::printf(
-      "  to %.2fx (%.2f s), flight weight %g: %s, %d iterations, %d evaluations, %d samples, solve %.1f ms "
-      "(retime_clip %.1f ms)\n",
+      "  to %.2fx (%.2f s), flight weight %g: %s, %d iterations, %d evaluations, %d samples, objective "
+      "%.6g, solve %.1f ms (retime_clip %.1f ms)\n",
       scale, scale * duration, flight_weight, r.solve.converged ? "converged" : "NOT converged",
-      r.solve.iterations, r.solve.evaluations, r.solve.samples, r.solve.seconds * 1000, t.call_ms);
+      r.solve.iterations, r.solve.evaluations, r.solve.samples, r.solve.objective, r.solve.seconds * 1000,
+      t.call_ms);
   std::printf(
       "    inside their hulls: %.1f%% of feasible-hull output frames, at their point: %.1f%% of flight or "
       "infeasible ones (%d output frames at the source rate); objective: feasibility %.4g, torque %.4g "

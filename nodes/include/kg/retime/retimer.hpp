@@ -11,7 +11,8 @@
 // 1 / samples_per_frame of a source frame at that segment's fastest playback (§3.5: "samples at
 // least once every quarter of a source frame"). The grid stays fixed during one L-BFGS solve, so
 // the objective the line search sees is smooth in the controls; when the solution plays a segment
-// faster than its steps allow, that segment is refined and the solve resumed.
+// faster than its steps allow, the grid is refined (every segment to a twentieth more steps than
+// the solution needs, counts never shrinking) and the solve resumed, at most four solves in all.
 //
 //   RetimeResult r = retime(objective, {.duration = 2.0, .pins = {{.source_time = 1.2, .output_time = 0.5}}});
 //   double source_time = r.warp.at(0.25);
@@ -86,7 +87,7 @@ struct RetimeResult {
   bool converged = false;
   int iterations = 0;      // L-BFGS iterations over all grids
   int evaluations = 0;     // objective evaluations
-  SampleGrid grid;         // the final grid (warp.segments() counts)
+  SampleGrid grid;         // the final grid (warp.segments() counts): sample_grid(warp) or finer
   int samples = 0;         // samples of the final grid: grid.samples()
   double objective = 0;    // the integral at the solution (barrier excluded)
   double seconds = 0;      // wall time of the solve
