@@ -10,9 +10,10 @@
 // a SampleGrid: per segment of the spline, the fewest equal steps that each cover at most
 // 1 / samples_per_frame of a source frame at that segment's fastest playback (§3.5: "samples at
 // least once every quarter of a source frame"). The grid stays fixed during one L-BFGS solve, so
-// the objective the line search sees is smooth in the controls; when the solution plays a segment
-// faster than its steps allow, the grid is refined (every segment to a twentieth more steps than
-// the solution needs, counts never shrinking) and the solve resumed, at most four solves in all.
+// the objective the line search sees does not jump as samples come and go; when the solution
+// plays a segment faster than its steps allow, the grid is refined (every segment to a twentieth
+// more steps than the solution needs, counts never shrinking) and the solve resumed, at most
+// four solves in all.
 //
 //   RetimeResult r = retime(objective, {.duration = 2.0, .pins = {{.source_time = 1.2, .output_time = 0.5}}});
 //   double source_time = r.warp.at(0.25);
@@ -99,7 +100,8 @@ struct RetimeResult {
 // max_iterations < 1, ...), or pins the warp cannot meet (warp_constraints, initial_warp).
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options);
 
-// The grid retime() starts from on `warp` (and refines to): per segment, the fewest steps (>= 1)
+// The grid retime() starts from on its first warp (each refinement gives every segment at least
+// the counts of this grid on the solution, plus a twentieth): per segment, the fewest steps (>= 1)
 // such that no step covers more than 1 / samples_per_frame of a source frame at the segment's
 // fastest playback (TimeWarp::max_pdot), i.e. ceil(h · max ṗ · source_fps · samples_per_frame),
 // up to a relative 1e-9 so that a count met exactly is not doubled by rounding. source_fps:
