@@ -19,11 +19,13 @@
 //      Bake         the BakedObjective constructor over the clip (sector torques and the six
 //                   coefficients of every sector, the flight terms), divided by the frames;
 //      Obj          BakedObjective::evaluate (value and gradient) at every sample of the retimer's
-//                   grid (at least 4 per source frame at the fastest playback: grid_samples) along
-//                   the warp the retimer returns for 0.8 times the clip's duration, in order with
-//                   the retimer's sector hint; the time of the whole grid divided by the source
-//                   frames. "Per frame" thus covers every sample falling in one source frame (the
-//                   samples per frame are printed); per evaluation is printed below the table;
+//                   final grid (RetimeResult::grid: per spline segment, at least 4 samples per
+//                   source frame at that segment's fastest playback, sample_grid, refined where the
+//                   solve sped a segment up) along the warp the retimer returns for 0.8 times the
+//                   clip's duration, in order with the retimer's sector hint; the time of the whole
+//                   grid divided by the source frames. "Per frame" thus covers every sample falling
+//                   in one source frame (the samples per frame are printed); per evaluation is
+//                   printed below the table;
 //      NP-Obj       the same integrand and gradient without baking: per evaluation and per channel
 //                   τ = t0 + Ta p̈ + Tb ṗ² from the sector's torques (sector_torques, precomputed per
 //                   sector, not reduced to six coefficients) and its squared error; the feasibility
@@ -38,8 +40,9 @@
 // 2. optimiser: retime_clip to 0.8 times the duration of CMU 07_05 (AMC at 120 Hz resampled to
 //    60 Hz: 259 frames) and 16_15 (resampled to 30 Hz: 118 frames), the pipeline of
 //    graphs/retime.yaml (de Leva male 70 kg, detected contacts, smoothing 0.04 s, default hulls,
-//    objective match): iterations, evaluations, solve time (median of 3 solves), the share of
-//    output frames inside their hulls.
+//    objective match): iterations, evaluations, the final grid's samples, the objective the
+//    solve reached (RetimeResult::objective, on that grid), solve time (median of 3 solves), the
+//    share of output frames inside their hulls.
 // 3. jump: the CMU jumps 16_01 (its header says 30 fps, it is 120), 13_11 and 13_13 (Daz BVH)
 //    through the same pipeline at 30 Hz, retimed to 0.5 and 0.65 of their duration, and to 0.5 with
 //    graphs/retime/jump_half.yaml's flight weight (fig. 1's experiment: the flight weighs more than
@@ -347,15 +350,13 @@ void prepare_problem(Case& c) {
       .alpha = options.alpha, .beta = options.beta, .torque_scale = retime::torque_scale(s, c.targets)};
   c.solution = retime::retime_clip(c.hulls, c.torques, c.clip.fps, options, s);
   const retime::TimeWarp& warp = c.solution.warp;
-  const int n = retime::grid_samples(warp, c.clip.fps, options.solve.samples_per_frame);
-  const double dt = warp.duration / (n - 1);
   c.first_sample.assign(static_cast<std::size_t>(frames) + 1, 0);
-  for (int k = 0; k < n; ++k) {
-    const retime::WarpSample w = warp.sample(k * dt);
+  retime::for_each_sample(c.solution.solve.grid, warp.duration, [&](double t, double) {
+    const retime::WarpSample w = warp.sample(t);
     c.samples.push_back({w.p, w.pddot, w.pdot * w.pdot});
     const int f = std::clamp(static_cast<int>(w.p * c.clip.fps), 0, frames - 1);
     ++c.first_sample[static_cast<std::size_t>(f) + 1];
-  }
+  });
   for (int f = 0; f < frames; ++f)
     c.first_sample[static_cast<std::size_t>(f) + 1] += c.first_sample[static_cast<std::size_t>(f)];
 }
@@ -752,10 +753,11 @@ Timed retime_timed(const Clip& c, double scale, int runs, double flight_weight =
 void print_retime(const Timed& t, double scale, double duration, double flight_weight = 1) {
   const retime::ClipRetime& r = t.r;
   std::printf(
-      "  to %.2fx (%.2f s), flight weight %g: %s, %d iterations, %d evaluations, %d samples, solve %.1f ms "
-      "(retime_clip %.1f ms)\n",
+      "  to %.2fx (%.2f s), flight weight %g: %s, %d iterations, %d evaluations, %d samples, objective "
+      "%.6g, solve %.1f ms (retime_clip %.1f ms)\n",
       scale, scale * duration, flight_weight, r.solve.converged ? "converged" : "NOT converged",
-      r.solve.iterations, r.solve.evaluations, r.solve.samples, r.solve.seconds * 1000, t.call_ms);
+      r.solve.iterations, r.solve.evaluations, r.solve.samples, r.solve.objective, r.solve.seconds * 1000,
+      t.call_ms);
   std::printf(
       "    inside their hulls: %.1f%% of feasible-hull output frames, at their point: %.1f%% of flight or "
       "infeasible ones (%d output frames at the source rate); objective: feasibility %.4g, torque %.4g "
@@ -1079,11 +1081,25 @@ int main(int argc, char** argv) {
                     c->solution.solve.iterations);
       std::printf("%10s", s);
     }
+    std::printf("\n%-14s", "solve ms");
+    for (const auto& c : cases) std::printf("%10.1f", c->solution.solve.seconds * 1000);
+    // A "!" says why: Ceres' reason, or the grid refined four times without catching up.
+    for (const auto& c : cases)
+      if (!c->solution.solve.converged)
+        std::printf("\n  %s did not converge: %s", c->name.c_str(), c->solution.solve.message.c_str());
     std::printf("\n%-14s", "samples");
     for (const auto& c : cases) std::printf("%10zu", c->samples.size());
     std::printf("\n%-14s", "samples/frame");
     for (const auto& c : cases)
       std::printf("%10.2f", static_cast<double>(c->samples.size()) / c->clip.frame_count());
+    // What sample_grid gives the solution afresh: the grid only grows during a solve, so segments
+    // the solve slowed down keep the steps their starting playback needed.
+    std::printf("\n%-14s", "fewest/frame");
+    for (const auto& c : cases)
+      std::printf("%10.2f", static_cast<double>(retime::sample_grid(c->solution.warp, c->clip.fps,
+                                                                     retime::RetimeOptions{}.samples_per_frame)
+                                                    .samples()) /
+                                c->clip.frame_count());
     std::printf("\nper evaluation (ns):\n");
     for (std::size_t i = 0; i < rows.size(); ++i) {
       if (rows[i].name != "Obj" && rows[i].name != "NP-Obj" && rows[i].name != "Naive") continue;

@@ -133,16 +133,14 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
   }
 
   // Parts of the objective and the share of output frames inside their hulls.
-  const int samples = grid_samples(out.warp, fps, options.solve.samples_per_frame);
-  const double dt = out.warp.duration / (samples - 1);
-  for (int k = 0; k < samples; ++k) {
-    const WarpSample s = out.warp.sample(k * dt);
-    const double w = (k == 0 || k == samples - 1) ? dt / 2 : dt;
-    const BakedObjective::Parts parts =
-        objective.parts(nearest_frame(s.p, fps, frames), s.pddot, s.pdot * s.pdot);
-    out.feasibility += w * parts.feasibility;
-    out.torque += w * parts.torque;
-  }
+  for_each_sample(sample_grid(out.warp, fps, options.solve.samples_per_frame), out.warp.duration,
+                  [&](double t, double w) {
+                    const WarpSample s = out.warp.sample(t);
+                    const BakedObjective::Parts parts =
+                        objective.parts(nearest_frame(s.p, fps, frames), s.pddot, s.pdot * s.pdot);
+                    out.feasibility += w * parts.feasibility;
+                    out.torque += w * parts.torque;
+                  });
   out.output_frames = output_frame_count(out.warp, fps);
   int feasible_frames = 0, inside = 0, point_frames = 0, at_point = 0;
   for (int k = 0; k < out.output_frames; ++k) {

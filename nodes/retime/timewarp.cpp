@@ -58,6 +58,22 @@ WarpSample TimeWarp::sample(double t) const {
   return s;
 }
 
+double TimeWarp::max_pdot(int segment) const {
+  // ṗ(u) = ((d0 + d1) + 2 (d1 - d0) u + (d0 - 2 d1 + d2) u²) / 2h over u in [0, 1], with d the
+  // segment's three control differences (the quadratic B-spline of the differences): its largest
+  // value is at an end, or at the vertex when the parabola opens downwards.
+  const std::size_t s = static_cast<std::size_t>(segment);
+  const double d0 = controls[s + 1] - controls[s], d1 = controls[s + 2] - controls[s + 1],
+               d2 = controls[s + 3] - controls[s + 2];
+  const double a = d0 + d1, b = 2 * (d1 - d0), c = d0 - 2 * d1 + d2;
+  double most = std::max(a, a + b + c);
+  if (c < 0) {
+    const double u = -b / (2 * c);
+    if (u > 0 && u < 1) most = std::max(most, a + u * (b + u * c));
+  }
+  return most / (2 * knot_spacing());
+}
+
 bool TimeWarp::strictly_increasing(double margin) const {
   for (std::size_t j = 1; j < controls.size(); ++j)
     if (!(controls[j] - controls[j - 1] > margin)) return false;

@@ -41,6 +41,29 @@ TEST_CASE("warp sample weights are the derivatives of p with respect to the cont
   }
 }
 
+TEST_CASE("max_pdot is the fastest playback within each segment, wherever in it that lies") {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> step(0.01, 0.5);
+  TimeWarp warp = TimeWarp::uniform(3.0, 2.5, 40);
+  double c = -0.1;
+  for (double& control : warp.controls) control = (c += step(rng));
+  const double h = warp.knot_spacing();
+  int inside = 0;  // segments whose fastest playback lies strictly inside
+  for (int s = 0; s < warp.segments(); ++s) {
+    double fastest = 0, where = 0;
+    for (int k = 0; k <= 20000; ++k) {
+      const double pdot = warp.sample((s + k / 20000.0) * h).pdot;
+      if (pdot > fastest) fastest = pdot, where = k / 20000.0;
+    }
+    INFO("segment " << s << ", fastest at u = " << where);
+    CHECK(warp.max_pdot(s) == Approx(fastest).epsilon(1e-8));
+    CHECK(warp.max_pdot(s) >= fastest);
+    inside += where > 0.01 && where < 0.99;
+  }
+  CHECK(inside > 3);
+  CHECK(TimeWarp::uniform(4.0, 2.0, 7).max_pdot(3) == Approx(2.0));
+}
+
 TEST_CASE("initial_warp meets its ends and pins exactly and increases strictly") {
   const std::vector<Pin> pins{{.source_time = 1.5, .output_time = 0.5}, {.source_time = 2.0, .output_time = 1.5}};
   const TimeWarp warp = initial_warp(3.0, 2.0, 20, pins);

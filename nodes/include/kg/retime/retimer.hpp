@@ -6,9 +6,14 @@
 // The linear constraints are eliminated (controls = particular + null-space basis · y), so every
 // iterate meets them to rounding; a step that would make the controls non-increasing is refused
 // (the evaluation fails and the line search shortens it), and a weak log barrier on the control
-// differences keeps playback from stopping. The integral is a trapezoid rule over output time
-// with at least `samples_per_frame` samples per source frame (§3.5: a quarter frame); when the
-// solution plays faster than the grid allows, the grid is refined and the solve resumed.
+// differences keeps playback from stopping. The integral is a trapezoid rule over output time on
+// a SampleGrid: per segment of the spline, the fewest equal steps that each cover at most
+// 1 / samples_per_frame of a source frame at that segment's fastest playback (§3.5: "samples at
+// least once every quarter of a source frame"). The grid stays fixed during one L-BFGS solve, so
+// the objective the line search sees does not jump as samples come and go; when the solution
+// plays a segment faster than its steps allow, the grid is refined (every segment to a twentieth
+// more steps than the solution needs, counts never shrinking) and the solve resumed, at most
+// four solves in all.
 //
 //   RetimeResult r = retime(objective, {.duration = 2.0, .pins = {{.source_time = 1.2, .output_time = 0.5}}});
 //   double source_time = r.warp.at(0.25);
@@ -63,15 +68,31 @@ struct RetimeOptions {
   double gradient_tolerance = 1e-10;
 };
 
+// The grid of the trapezoid rule over a warp's output time [0, duration]: segment s of the warp
+// (output times [s h, (s + 1) h], h its knot spacing) is cut into steps[s] equal steps, so its
+// samples lie at s h + k h / steps[s], k = 0 .. steps[s]; neighbouring segments share the sample
+// at their common knot. It depends on the warp's layout (duration and segment count), not on its
+// controls: sample_grid() chooses the counts from a warp's playback.
+//
+//   SampleGrid grid = sample_grid(warp, 30, 4);            // warp: a TimeWarp of 30 fps source
+//   double cost = integrate(objective, warp, grid);
+//   for_each_sample(grid, warp.duration, [&](double t, double w) { total += w * f(t); });
+struct SampleGrid {
+  std::vector<int> steps{};  // per segment of the warp (TimeWarp::segments() entries), each >= 1
+
+  int samples() const;  // sample points: Σ steps + 1 (the empty grid has none)
+};
+
 struct RetimeResult {
   TimeWarp warp;
   bool converged = false;
   int iterations = 0;      // L-BFGS iterations over all grids
   int evaluations = 0;     // objective evaluations
-  int samples = 0;         // samples of the final grid
+  SampleGrid grid;         // the final grid (warp.segments() counts): sample_grid(warp) or finer
+  int samples = 0;         // samples of the final grid: grid.samples()
   double objective = 0;    // the integral at the solution (barrier excluded)
   double seconds = 0;      // wall time of the solve
-  std::string message;     // Ceres' termination message, and any grid refinement
+  std::string message;     // Ceres' termination message of the last solve, then each grid refinement
 };
 
 // Throws std::invalid_argument naming the option for options out of range (a duration that is
@@ -79,11 +100,40 @@ struct RetimeResult {
 // max_iterations < 1, ...), or pins the warp cannot meet (warp_constraints, initial_warp).
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options);
 
-// The integral of `objective` along `warp` on the grid retime() would use, with its gradient with
-// respect to the warp's controls when `gradient` is not null (controls.size() entries).
-double integrate(const PathObjective& objective, const TimeWarp& warp, int samples, double* gradient = nullptr);
+// The grid retime() starts from on its first warp (each refinement gives every segment at least
+// the counts of this grid on the solution, plus a twentieth): per segment, the fewest steps (>= 1)
+// such that no step covers more than 1 / samples_per_frame of a source frame at the segment's
+// fastest playback (TimeWarp::max_pdot), i.e. ceil(h · max ṗ · source_fps · samples_per_frame),
+// up to a relative 1e-9 so that a count met exactly is not doubled by rounding. source_fps:
+// frames per source second (> 0); samples_per_frame: 1 .. kMaxSamplesPerFrame. Throws
+// std::invalid_argument for either out of range, or a grid of more than kMaxGridSamples samples.
+inline constexpr int kMaxGridSamples = 100'000'000;
+SampleGrid sample_grid(const TimeWarp& warp, double source_fps, int samples_per_frame);
 
-// Samples of the grid giving at least `samples_per_frame` samples per source frame along `warp`.
-int grid_samples(const TimeWarp& warp, double source_fps, int samples_per_frame);
+// Calls visit(t, weight) for every sample of `grid` in order of output time: t in output seconds
+// over [0, duration], weight its trapezoid weight (output seconds; the weights sum to duration).
+// `duration`: the warp's output seconds; the grid's segments are duration / steps.size() long.
+template <class Visit>
+void for_each_sample(const SampleGrid& grid, double duration, Visit&& visit) {
+  const int segments = static_cast<int>(grid.steps.size());
+  if (segments == 0) return;
+  const double h = duration / segments;
+  double carried = 0;  // the last segment's half step, owed to the knot they share
+  for (int s = 0; s < segments; ++s) {
+    const int n = grid.steps[static_cast<std::size_t>(s)];
+    const double dt = h / n, start = s * h;
+    visit(start, carried + dt / 2);
+    for (int k = 1; k < n; ++k) visit(start + k * dt, dt);
+    carried = dt / 2;
+  }
+  visit(duration, carried);
+}
+
+// The trapezoid rule on `grid` of `objective` along `warp` (output seconds times the objective's
+// units), with its gradient with respect to the warp's controls written to `gradient` when not
+// null (warp.controls.size() entries, caller-owned). Throws std::invalid_argument when the grid
+// does not have warp.segments() counts, or a count is < 1.
+double integrate(const PathObjective& objective, const TimeWarp& warp, const SampleGrid& grid,
+                 double* gradient = nullptr);
 
 }  // namespace kg::retime

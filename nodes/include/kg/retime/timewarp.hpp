@@ -49,6 +49,10 @@ struct TimeWarp {
   // t is clamped to [0, duration].
   WarpSample sample(double t) const;
   double at(double t) const { return sample(t).p; }
+  // The fastest playback within segment `segment` (0 .. segments() - 1, output times
+  // [segment h, (segment + 1) h]): the largest ṗ there, source seconds per output second. Exact:
+  // ṗ is a quadratic in output time on each segment.
+  double max_pdot(int segment) const;
   // Whether every control exceeds the one before by more than `margin` source seconds.
   bool strictly_increasing(double margin = 0) const;
 
