@@ -161,7 +161,7 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
   const auto start = std::chrono::steady_clock::now();
   const int segments = checked_segments(options);
   const double source_duration = objective.source_duration();
-  TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins);
+  TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins, options.start);
   const WarpConstraints constraints = warp_constraints(source_duration, options.duration, segments, options.pins);
 
   // controls = particular + basis * y for every y: the constraints' null space (orthonormal).

@@ -132,17 +132,28 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
   return c;
 }
 
-TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins) {
+TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins,
+                      const std::vector<Pin>& playback) {
   const WarpConstraints constraints = warp_constraints(source_duration, duration, segments, pins);
-  // Knots of the piecewise-linear playback: the ends and the pins in output order.
-  std::vector<Pin> knots = pins;
-  knots.push_back({0, 0});
-  knots.push_back({source_duration, duration});
-  std::sort(knots.begin(), knots.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  // Knots of the piecewise-linear playback: the given playback, or the ends and the pins in
+  // output order.
+  std::vector<Pin> knots = playback;
+  for (std::size_t k = 1; k < knots.size(); ++k)
+    if (!(knots[k].output_time > knots[k - 1].output_time) || !(knots[k].source_time >= knots[k - 1].source_time))
+      throw std::invalid_argument("time warp: the starting playback's sample " + std::to_string(k) +
+                                  " does not follow sample " + std::to_string(k - 1) +
+                                  " (output times must increase, source times not decrease)");
+  if (knots.size() == 1) throw std::invalid_argument("time warp: a starting playback of one sample");
+  if (knots.empty()) {
+    knots = pins;
+    knots.push_back({0, 0});
+    knots.push_back({source_duration, duration});
+    std::sort(knots.begin(), knots.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  }
   auto linear = [&](double t) {
-    std::size_t i = 1;
-    while (i + 1 < knots.size() && knots[i].output_time < t) ++i;
-    const Pin &a = knots[i - 1], &b = knots[i];
+    const auto after = std::lower_bound(knots.begin() + 1, knots.end() - 1, t,
+                                        [](const Pin& k, double time) { return k.output_time < time; });
+    const Pin &a = *(after - 1), &b = *after;
     return a.source_time + (t - a.output_time) * (b.source_time - a.source_time) / (b.output_time - a.output_time);
   };
   TimeWarp warp = TimeWarp::uniform(source_duration, duration, segments);

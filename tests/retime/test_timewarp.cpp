@@ -18,8 +18,9 @@ TEST_CASE("a uniform warp plays at constant speed and meets its ends") {
   CHECK(warp.strictly_increasing());
 }
 
-TEST_CASE("warp sample weights are the derivatives of p with respect to the controls, and p's derivatives are "
-          "consistent") {
+TEST_CASE(
+    "warp sample weights are the derivatives of p with respect to the controls, and p's derivatives are "
+    "consistent") {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> step(0.05, 0.4);
   TimeWarp warp = TimeWarp::uniform(3.0, 2.5, 9);
@@ -29,7 +30,8 @@ TEST_CASE("warp sample weights are the derivatives of p with respect to the cont
   for (double t : {0.01, 0.4, 1.3, 2.2}) {
     const WarpSample s = warp.sample(t);
     CHECK(s.pdot == Approx((warp.at(t + h) - warp.at(t - h)) / (2 * h)).epsilon(1e-6));
-    CHECK(s.pddot == Approx((warp.sample(t + h).pdot - warp.sample(t - h).pdot) / (2 * h)).epsilon(1e-5).margin(1e-5));
+    CHECK(s.pddot ==
+          Approx((warp.sample(t + h).pdot - warp.sample(t - h).pdot) / (2 * h)).epsilon(1e-5).margin(1e-5));
     for (int i = 0; i < 4; ++i) {
       TimeWarp moved = warp;
       moved.controls[static_cast<std::size_t>(s.first + i)] += 1.0;
@@ -65,7 +67,8 @@ TEST_CASE("max_pdot is the fastest playback within each segment, wherever in it 
 }
 
 TEST_CASE("initial_warp meets its ends and pins exactly and increases strictly") {
-  const std::vector<Pin> pins{{.source_time = 1.5, .output_time = 0.5}, {.source_time = 2.0, .output_time = 1.5}};
+  const std::vector<Pin> pins{{.source_time = 1.5, .output_time = 0.5},
+                              {.source_time = 2.0, .output_time = 1.5}};
   const TimeWarp warp = initial_warp(3.0, 2.0, 20, pins);
   CHECK(warp.at(0.0) == Approx(0.0).margin(1e-12));
   CHECK(warp.at(2.0) == Approx(3.0));
@@ -73,6 +76,21 @@ TEST_CASE("initial_warp meets its ends and pins exactly and increases strictly")
   CHECK(warp.at(1.5) == Approx(2.0));
   CHECK(warp.strictly_increasing());
   for (double t = 0; t <= 2.0; t += 0.01) CHECK(warp.sample(t).pdot > 0);
+}
+
+TEST_CASE("initial_warp follows a starting playback, corrected onto the ends") {
+  // Fast for the first output second (2.5 s of source), then slow (0.5 s in the next).
+  const std::vector<Pin> playback{{0, 0}, {2.5, 1.0}, {3.0, 2.0}};
+  const TimeWarp warp = initial_warp(3.0, 2.0, 40, {}, playback);
+  CHECK(warp.at(0.0) == Approx(0.0).margin(1e-12));
+  CHECK(warp.at(2.0) == Approx(3.0));
+  CHECK(warp.at(1.0) == Approx(2.5).epsilon(0.02));
+  CHECK(warp.sample(0.5).pdot == Approx(2.5).epsilon(0.02));
+  CHECK(warp.sample(1.5).pdot == Approx(0.5).epsilon(0.02));
+  CHECK(warp.strictly_increasing());
+  CHECK_THROWS_WITH(initial_warp(3.0, 2.0, 40, {}, {{0, 0}, {2.0, 1.0}, {1.5, 1.5}, {3.0, 2.0}}),
+                    Catch::Contains("sample 2 does not follow sample 1"));
+  CHECK_THROWS_WITH(initial_warp(3.0, 2.0, 40, {}, {{0, 0}}), Catch::Contains("one sample"));
 }
 
 TEST_CASE("warp constraints refuse contradictory and misplaced pins, and segments too coarse for the pins") {
@@ -85,11 +103,19 @@ TEST_CASE("warp constraints refuse contradictory and misplaced pins, and segment
     return std::string("no error");
   };
   using Catch::Matchers::Contains;
-  CHECK_THAT(message([] { warp_constraints(3, 2, 10, {{1.0, 0.5}, {0.8, 1.0}}); }), Contains("contradictory pins"));
-  CHECK_THAT(message([] { warp_constraints(3, 2, 10, {{1.0, 0.5}, {1.2, 0.5}}); }), Contains("two pins at output"));
+  CHECK_THAT(message([] {
+               warp_constraints(3, 2, 10, {{1.0, 0.5}, {0.8, 1.0}});
+             }),
+             Contains("contradictory pins"));
+  CHECK_THAT(message([] {
+               warp_constraints(3, 2, 10, {{1.0, 0.5}, {1.2, 0.5}});
+             }),
+             Contains("two pins at output"));
   CHECK_THAT(message([] { warp_constraints(3, 2, 10, {{1.0, 2.5}}); }), Contains("output time outside"));
   CHECK_THAT(message([] { warp_constraints(3, 2, 10, {{3.5, 1.0}}); }), Contains("source time outside"));
   CHECK_THAT(message([] { warp_constraints(3, -2, 10, {}); }), Contains("duration"));
-  CHECK_THAT(message([] { initial_warp(3, 2, 1, {{0.3, 0.2}, {0.4, 0.25}, {2.9, 0.3}, {2.95, 1.9}}); }),
+  CHECK_THAT(message([] {
+               initial_warp(3, 2, 1, {{0.3, 0.2}, {0.4, 0.25}, {2.9, 0.3}, {2.95, 1.9}});
+             }),
              Contains("use shorter segments"));
 }

@@ -53,6 +53,8 @@ inline constexpr int kMaxSamplesPerFrame = 1000;
 struct RetimeOptions {
   double duration = 0;        // output seconds (finite, > 0)
   std::vector<Pin> pins{};    // source moments at output times (finite; warp_constraints)
+  std::vector<Pin> start{};   // samples of a playback to start from (initial_warp's `playback`);
+                              // empty: constant speed between the ends and pins
   double knot_spacing = 0.1;  // output seconds between the spline's controls (> 0, at most
                               // kMaxSegments segments over the duration)
   int samples_per_frame = 4;  // at least this many samples per source frame (1 .. kMaxSamplesPerFrame)

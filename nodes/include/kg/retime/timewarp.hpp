@@ -72,10 +72,13 @@ struct WarpConstraints {
 // increasing p(t) meets them).
 WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
 
-// A strictly increasing warp meeting the constraints: piecewise-constant speed between the ends
-// and pins, fitted by a spline and corrected onto the constraints. Throws std::invalid_argument
-// (naming the closest pair of pins) when `segments` is too coarse to pass the pins increasingly.
-TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
+// A strictly increasing warp meeting the constraints: `playback` (samples of a playback to start
+// from, in increasing output and source time, from (0, 0) to (duration, source_duration); empty:
+// piecewise-constant speed between the ends and pins) fitted by a spline and corrected onto the
+// constraints. Throws std::invalid_argument for a playback not increasing, or (naming the closest
+// pair of pins) when `segments` is too coarse to pass the pins increasingly.
+TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins,
+                      const std::vector<Pin>& playback = {});
 
 // A warp of `segments` segments through the playback samples (output_times[i], source_times[i]),
 // which start at (0, 0) and increase: its controls sample the piecewise-linear playback at their
