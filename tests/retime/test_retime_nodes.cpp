@@ -15,15 +15,22 @@
 
 using namespace kg;
 
+namespace {
+
+// retime.hulls' inputs for a synthesized walk at 30 Hz, each a value of its own.
+std::map<std::string, graph::Value> walk_inputs() {
+  const motion::Motion walk = motion::resample(synth::synthesize_walk({.steps = 2}).motion, 30);
+  const retime::BodyModel body = retime::build_body_model(walk.skeleton, {}).body;
+  return {{"body", graph::Value::make(body)},
+          {"contacts", graph::Value::make(retime::detect_contacts(walk, {}))},
+          {"torques", graph::Value::make(retime::path_torques(body, walk, retime::path_derivatives(walk)))}};
+}
+
+}  // namespace
+
 TEST_CASE("retime.hulls nodes with the same inputs and settings share one build", "[retime][hulls][node]") {
   const graph::Registry registry = test::registry_of(retime_node_types());
-  const motion::Motion walk = motion::resample(synth::synthesize_walk({.steps = 2}).motion, 30);
-  const auto body = graph::Value::make(retime::build_body_model(walk.skeleton, {}).body);
-  const auto contacts = graph::Value::make(retime::detect_contacts(walk, {}));
-  const auto torques = graph::Value::make(
-      retime::path_torques(body.get<retime::BodyModel>(), walk, retime::path_derivatives(walk)));
-  const std::map<std::string, graph::Value> inputs{
-      {"body", body}, {"contacts", contacts}, {"torques", torques}};
+  const std::map<std::string, graph::Value> inputs = walk_inputs();
   auto run = [&](std::map<std::string, graph::ParamValue> params,
                  const std::map<std::string, graph::Value>& in) {
     return test::run_node(registry, "retime.hulls", test::params_for(registry, "retime.hulls", params), in);
@@ -48,7 +55,7 @@ TEST_CASE("retime.hulls nodes with the same inputs and settings share one build"
   CHECK(hulls_of(lighter)->gravity.y() == Approx(-5));
   // Equal contacts in another object: not taken for the same input.
   std::map<std::string, graph::Value> copied = inputs;
-  copied["contacts"] = graph::Value::make(contacts.get<retime::Contacts>());
+  copied["contacts"] = graph::Value::make(inputs.at("contacts").get<retime::Contacts>());
   const test::NodeContext copy = run({}, copied);
   CHECK_FALSE(std::get<bool>(copy.figures.at("shared")));
   CHECK(hulls_of(copy)->frames.size() == hulls_of(first)->frames.size());
@@ -56,13 +63,7 @@ TEST_CASE("retime.hulls nodes with the same inputs and settings share one build"
 
 TEST_CASE("retime.hulls builds again once the shared hulls are released", "[retime][hulls][node]") {
   const graph::Registry registry = test::registry_of(retime_node_types());
-  const motion::Motion walk = motion::resample(synth::synthesize_walk({.steps = 2}).motion, 30);
-  const auto body = graph::Value::make(retime::build_body_model(walk.skeleton, {}).body);
-  const auto contacts = graph::Value::make(retime::detect_contacts(walk, {}));
-  const auto torques = graph::Value::make(
-      retime::path_torques(body.get<retime::BodyModel>(), walk, retime::path_derivatives(walk)));
-  const std::map<std::string, graph::Value> inputs{
-      {"body", body}, {"contacts", contacts}, {"torques", torques}};
+  const std::map<std::string, graph::Value> inputs = walk_inputs();
   const graph::Params params = test::params_for(registry, "retime.hulls", {});
   { const test::NodeContext gone = test::run_node(registry, "retime.hulls", params, inputs); }
   const test::NodeContext again = test::run_node(registry, "retime.hulls", params, inputs);
