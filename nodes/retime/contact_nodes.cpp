@@ -140,15 +140,17 @@ NodeType contacts_type() {
                     .doc =
                         "m/s²: at frames without plants whose root accelerates upward more than this above "
                         "free fall, feet within the leave height touch however fast they move (a landing's "
-                        "impact, a takeoff's last push); 0: off",
+                        "impact, a takeoff's last push), from a plant outwards: a clip never planted stays "
+                        "so; 0: off",
                     .min = 0.0,
                     .max = 100.0},
           ParamSpec{.name = "floor",
                     .type = ParamType::String,
                     .default_value = std::string("auto"),
                     .doc =
-                        "floor height in metres (the soles touch within height_threshold of it), or 'auto' "
-                        "(each sole point's own lowest heights: captured floors slope and drift)"},
+                        "floor height in metres (the soles touch within height_threshold of it; rest_window_s "
+                        "is then unused), or 'auto' (each sole point's own lowest heights: captured floors "
+                        "slope and drift)"},
       }};
   return {spec, [](const Params& p) { return std::make_unique<ContactsNode>(p); }};
 }

@@ -63,6 +63,7 @@ std::vector<Pin> flight_at_source_speed(const Hulls& hulls, double fps, double d
   const double source_duration = (frames - 1) / fps, flight_time = flying / fps;
   if (flying == 0 || duration - flight_time < 0.1 * duration) return {};
   const double speed = (source_duration - flight_time) / (duration - flight_time);
+  if (!(speed > 0) || !std::isfinite(speed)) return {};  // all flight: nothing else to play
   std::vector<Pin> playback{{0, 0}};
   for (int f = 0; f + 1 < frames; ++f)
     playback.push_back({(f + 1) / fps, playback.back().output_time + (flight(f) && flight(f + 1) ? 1 : 1 / speed) / fps});

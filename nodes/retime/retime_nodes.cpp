@@ -173,7 +173,8 @@ NodeType torque_limits_node_type() {
 // body) and `hulls` (gravity and mass_scale from its variables) are such a pair when nothing is
 // edited; the hulls are the costliest step of the pipeline. A node arriving while another builds
 // waits for it. Entries name their inputs and results weakly: they match only while those objects
-// live (so an address cannot be reused by another object meanwhile), and die with the run.
+// live (so an address cannot be reused by another object meanwhile), and are dropped at the next
+// lookup once they are gone.
 struct HullsKey {
   const void* body = nullptr;
   const void* contacts = nullptr;

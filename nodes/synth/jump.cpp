@@ -380,9 +380,11 @@ Synthesis synthesize_jump(const JumpOptions& options) {
     const Eigen::RowVectorXd rest = retime::rest_pose_values(*fig.skeleton);
     return retime::build_body_model(fig.skeleton, {}, &rest).body;
   }();
+  // Its own writer: the frames' writer carries each joint's Euler branch from frame to frame.
+  PoseWriter com_writer(fig);
   Eigen::RowVectorXd values(fig.skeleton->channel_count());
   auto com_of = [&](const BodyPose& p) {
-    writer.write(p, values.data());
+    com_writer.write(p, values.data());
     return retime::body_com(body, values);
   };
   const double flight_time = t_land - t_off;

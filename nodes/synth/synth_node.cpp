@@ -127,7 +127,8 @@ graph::NodeType synthesize_type() {
                  {.name = "jump_height",
                   .type = ParamType::Float,
                   .default_value = 0.3,
-                  .doc = "jump: rise of the root from takeoff to apex, m",
+                  .doc = "jump: rise of the planned root from takeoff to apex, m (the written root rises a few "
+                         "percent less: the body is shifted so that its centre of mass flies ballistically)",
                   .min = synth::kJumpHeightRange.min,
                   .max = synth::kJumpHeightRange.max},
                  {.name = "jump_distance",

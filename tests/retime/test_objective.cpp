@@ -345,4 +345,19 @@ TEST_CASE("retime_clip solves a clip with flight from two starts and keeps the l
   pinned.solve.pins = {{.source_time = 1.0, .output_time = 0.5}};
   CHECK_THAT(retime_clip(c.hulls, c.torques, 30, pinned, c.skeleton).message,
              !Catch::Contains("two starts"));
+  // A clip of nothing but flight (a library caller's: retime.hulls refuses it) has no rest to
+  // speed up: one start.
+  BoxAndFlight all_flight = c;
+  for (FrameHull& hull : all_flight.hulls.frames) {
+    hull.status = HullStatus::Flight;
+    hull.vertices = {{0.0, 1.0}};
+    hull.lambda.assign(1, Eigen::VectorXd());
+    hull.on_box.assign(1, 0);
+    build_fan(hull);
+  }
+  // Longer than the source: the flight at source speed would leave time with nothing to play.
+  const ClipRetimeOptions longer{.solve = {.duration = 2.5, .knot_spacing = 0.05}};
+  const ClipRetime flying = retime_clip(all_flight.hulls, all_flight.torques, 30, longer, all_flight.skeleton);
+  CHECK_THAT(flying.message, !Catch::Contains("two starts"));
+  CHECK(flying.warp.strictly_increasing());
 }

@@ -73,7 +73,7 @@ inline constexpr Range kStepsRange{2, 200};              // steps of a walk
 inline constexpr Range kSpeedRange{0.4, 2.0};            // walking speed, m/s
 inline constexpr Range kStatureRange{1.2, 2.2};          // m
 inline constexpr Range kFpsRange{10, 1000};              // frames per second
-inline constexpr Range kJumpHeightRange{0.05, 0.6};      // rise of the root from takeoff to apex, m
+inline constexpr Range kJumpHeightRange{0.05, 0.6};      // the planned root's rise to the apex, m
 inline constexpr Range kJumpDistanceRange{0.0, 2.0};     // forward travel of the feet, m
 inline constexpr Range kGravityRange{1.0, 30.0};         // m/s^2
 inline constexpr Range kClimbRungsRange{1, 60};          // rungs climbed
@@ -181,7 +181,9 @@ struct WalkOptions {
 };
 
 struct JumpOptions {
-  double height = 0.3;    // rise of the root from takeoff to the apex, m
+  double height = 0.3;    // rise of the planned root from takeoff to the apex, m (the shift that
+                          // makes the centre of mass ballistic lowers the written root's apex
+                          // by a few percent: 0.287 m for 0.3)
   double distance = 0.8;  // forward travel of the feet from takeoff to landing, m (0: vertical
                           // jump; its root drifts about 2 cm back in flight, the leans differing)
   double stature = 1.75;  // m
