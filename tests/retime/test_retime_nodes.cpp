@@ -3,6 +3,11 @@
 // input objects, or inputs released since, build their own.
 #include <catch2/catch.hpp>
 
+#include <optional>
+#include <string>
+#include <thread>
+#include <tuple>
+
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/resample.hpp"
@@ -68,4 +73,42 @@ TEST_CASE("retime.hulls builds again once the shared hulls are released", "[reti
   { const test::NodeContext gone = test::run_node(registry, "retime.hulls", params, inputs); }
   const test::NodeContext again = test::run_node(registry, "retime.hulls", params, inputs);
   CHECK_FALSE(std::get<bool>(again.figures.at("shared")));
+}
+
+TEST_CASE("retime.hulls nodes running at once share one build, and share its failure",
+          "[retime][hulls][node]") {
+  const graph::Registry registry = test::registry_of(retime_node_types());
+  const std::map<std::string, graph::Value> inputs = walk_inputs();
+  auto run_pair = [&](const graph::Params& params) {
+    // Two threads as the executor runs independent nodes: whichever comes second waits for the
+    // first's build (or finds it done).
+    std::optional<test::NodeContext> a, b;
+    std::string error_a, error_b;
+    auto run = [&](std::optional<test::NodeContext>& out, std::string& error) {
+      try {
+        out = test::run_node(registry, "retime.hulls", params, inputs);
+      } catch (const std::exception& e) {
+        error = e.what();
+      }
+    };
+    std::thread other([&] { run(b, error_b); });
+    run(a, error_a);
+    other.join();
+    return std::make_tuple(std::move(a), std::move(b), error_a, error_b);
+  };
+  {
+    const auto [a, b, error_a, error_b] = run_pair(test::params_for(registry, "retime.hulls", {}));
+    REQUIRE(a.has_value());
+    REQUIRE(b.has_value());
+    CHECK(std::get<bool>(a->figures.at("shared")) != std::get<bool>(b->figures.at("shared")));
+    CHECK(&a->outputs.at("hulls").get<retime::Hulls>() == &b->outputs.at("hulls").get<retime::Hulls>());
+  }
+  // The walk's torques model no segment, so a mass scale fails inside the build: both nodes
+  // fail with its message.
+  const auto [a, b, error_a, error_b] =
+      run_pair(test::params_for(registry, "retime.hulls", {{"mass_scale", 2.0}}));
+  CHECK_FALSE(a.has_value());
+  CHECK_FALSE(b.has_value());
+  CHECK_THAT(error_a, Catch::Contains("a mass scale needs the segment"));
+  CHECK(error_b == error_a);
 }
