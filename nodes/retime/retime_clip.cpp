@@ -66,7 +66,8 @@ std::vector<Pin> flight_at_source_speed(const Hulls& hulls, double fps, double d
   if (!(speed > 0) || !std::isfinite(speed)) return {};  // all flight: nothing else to play
   std::vector<Pin> playback{{0, 0}};
   for (int f = 0; f + 1 < frames; ++f)
-    playback.push_back({(f + 1) / fps, playback.back().output_time + (flight(f) && flight(f + 1) ? 1 : 1 / speed) / fps});
+    playback.push_back(
+        {(f + 1) / fps, playback.back().output_time + (flight(f) && flight(f + 1) ? 1 : 1 / speed) / fps});
   playback.back() = {source_duration, duration};  // exactly, whatever the sum's rounding
   return playback;
 }
@@ -152,10 +153,9 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
     // solved twice, from constant speed and from its flights at source speed, and the lower
     // objective kept: bench_retime's jumps retimed to half their duration kept their flights near
     // source speed from either start in some runs and not in others.
-    const std::vector<Pin> flight_start =
-        options.solve.pins.empty() && options.solve.start.empty()
-            ? flight_at_source_speed(hulls, fps, options.solve.duration)
-            : std::vector<Pin>{};
+    const std::vector<Pin> flight_start = options.solve.pins.empty() && options.solve.start.empty()
+                                              ? flight_at_source_speed(hulls, fps, options.solve.duration)
+                                              : std::vector<Pin>{};
     std::string starts;
     if (!flight_start.empty()) {
       RetimeOptions second = options.solve;
@@ -180,8 +180,8 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
     }
     out.warp = out.solve.warp;
     message << (out.solve.converged ? "converged" : "did not converge") << " in " << out.solve.iterations
-            << " iterations" << starts << ", " << fixed(out.solve.seconds * 1000, 1) << " ms (" << out.solve.message
-            << "). ";
+            << " iterations" << starts << ", " << fixed(out.solve.seconds * 1000, 1) << " ms ("
+            << out.solve.message << "). ";
   }
 
   // Parts of the objective and the share of output frames inside their hulls.
