@@ -106,18 +106,18 @@ struct FootContactOptions {
   std::vector<std::string> feet{};
   double heel_ratio = 0.25;   // heel behind the ankle, as a fraction of the ankle-to-tip distance (>= 0)
   double width_ratio = 0.36;  // foot width as a fraction of the foot's length (> 0)
+  // Frames the plants leave without contact while the root is held up (its vertical acceleration,
+  // by second differences over about 1/30 s, above −9.81 + support_acceleration m/s²: the clip is
+  // taken as captured under Earth's gravity), from a plant outwards: there a foot point within the
+  // plants' leave height (height_threshold × hysteresis above its rest level) touches however fast
+  // it moves, so the frames of a landing's impact and of a takeoff's last push, where feet still
+  // strike or slide, are not taken for flight. 0: off (>= 0, m/s²).
+  double support_acceleration = 4.9;
   // Plant detection of the heel and toe-tip points (its `points` are ignored: set from the feet).
   // A foot bears weight while it rolls, so contacts keep a plant's rolling ends (trim_distance 0)
   // and admit faster points than footplants do (0.3 m/s: a heel strikes at a few dm/s; at 0.15 m/s
-  // CMU 16_15 loses half its double supports).
-  // Frames the plants leave without contact while the root is held up (its vertical acceleration,
-  // by second differences over about 1/30 s, above −9.81 + support_acceleration m/s²: the clip is
-  // taken as captured under Earth's gravity): there a foot point within the plants' leave height
-  // (height_threshold × hysteresis above its rest level) touches however fast it moves, so the
-  // frames of a landing's impact and of a takeoff's last push, where feet still strike or slide,
-  // are not taken for flight. 0: off (>= 0, m/s²).
-  double support_acceleration = 4.9;
-  // A given floor (plants.floor) is where the heel and tip points rest (rest_on_floor).
+  // CMU 16_15 loses half its double supports). A given floor (plants.floor) is where the heel and
+  // tip points rest (rest_on_floor).
   retarget::FootplantOptions plants = [] {
     retarget::FootplantOptions o;
     o.rest_on_floor = true;
