@@ -95,6 +95,7 @@ ManifestRecord full_record() {
   r.outputs = {{"walk 01/walk 01.bvh", std::string(64, 'a'), 81234},
                {"/elsewhere/empty.txt", kEmptyDigest, 0},
                {"big.bin", std::string(64, 'f'), 123456789012ULL}};
+  r.reads = {{"/data/cmu/walk 01.bvh", std::string(64, 'b'), 512000}, {"/data/16.asf", kEmptyDigest, 0}};
   r.figures = {{"solve.iterations", std::int64_t{12}},
                {"solve.converged", true},
                {"check.failed", false},
@@ -117,6 +118,15 @@ ManifestRecord full_record() {
   return r;
 }
 
+void check_same(const std::vector<ManifestFile>& got, const std::vector<ManifestFile>& want) {
+  REQUIRE(got.size() == want.size());
+  for (std::size_t i = 0; i < got.size(); ++i) {
+    CHECK(got[i].path == want[i].path);
+    CHECK(got[i].sha256 == want[i].sha256);
+    CHECK(got[i].bytes == want[i].bytes);
+  }
+}
+
 void check_same(const ManifestRecord& got, const ManifestRecord& want) {
   CHECK(got.input == want.input);
   CHECK(got.stem == want.stem);
@@ -126,12 +136,8 @@ void check_same(const ManifestRecord& got, const ManifestRecord& want) {
   CHECK(got.wall_seconds == want.wall_seconds);
   CHECK(got.graph_seconds == want.graph_seconds);
   CHECK(got.log == want.log);
-  REQUIRE(got.outputs.size() == want.outputs.size());
-  for (std::size_t i = 0; i < got.outputs.size(); ++i) {
-    CHECK(got.outputs[i].path == want.outputs[i].path);
-    CHECK(got.outputs[i].sha256 == want.outputs[i].sha256);
-    CHECK(got.outputs[i].bytes == want.outputs[i].bytes);
-  }
+  check_same(got.outputs, want.outputs);
+  check_same(got.reads, want.reads);
   REQUIRE(got.figures.size() == want.figures.size());
   for (std::size_t i = 0; i < got.figures.size(); ++i) {
     INFO("figure " << want.figures[i].first);
