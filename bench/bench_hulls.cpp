@@ -29,7 +29,7 @@
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"
@@ -38,6 +38,7 @@
 
 using namespace kg;
 using namespace kg::retime;
+using namespace kg::body;
 
 namespace {
 
@@ -94,10 +95,10 @@ int main(int argc, char** argv) {
   const motion::Skeleton& sk = *walk.skeleton;
   const int frames = walk.frame_count(), channels = sk.channel_count();
 
-  retime::BodySpec spec;
+  body::BodySpec spec;
   if (std::isfinite(limit)) spec.torque_limits = {{".*", {limit}, {}}};
   const Eigen::RowVectorXd reference = walk.values.row(0);
-  const BodyModel body = retime::build_body_model(walk.skeleton, spec, &reference).body;
+  const BodyModel body = body::build_body_model(walk.skeleton, spec, &reference).body;
   auto t0 = Clock::now();
   const std::vector<FrameTorques> torques =
       retime::path_torques(body, walk, retime::path_derivatives(walk, smooth_s)).frames;
@@ -208,7 +209,7 @@ int main(int argc, char** argv) {
     // -9.8 m/s² in true flight, so a flight frame far from it is a contact detected late or early.
     std::vector<double> com(static_cast<std::size_t>(frames));
     for (int f = 0; f < frames; ++f)
-      com[static_cast<std::size_t>(f)] = retime::body_com(body, walk.values.row(f)).y();
+      com[static_cast<std::size_t>(f)] = body::body_com(body, walk.values.row(f)).y();
     std::printf(
         "\nframe  status      patches  λ   LPs  vertices  ms      CoM ÿ m/s²  centre            message\n");
     for (int f = 0; f < frames; ++f) {

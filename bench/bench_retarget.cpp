@@ -23,6 +23,7 @@
 
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
+#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/motion/resample.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
@@ -193,7 +194,7 @@ Case cmu_case(const motion::Motion& src, const char* name) {
     factors[j] = 0.6 * 0.85;
   }
   const Target target = factor_target(src.skeleton, factors);
-  const FootplantDetection d = detect_footplants(src, {});
+  const motion::FootplantDetection d = motion::detect_footplants(src, {});
   PlantConstraintOptions plant_options{.flavour = PlantFlavour::Floor, .above_floor = true};
   plant_options.height_scale = plant_height_scale(target, src.fps);
   ConstraintSet set = footplant_constraints(d, src.frame_count(), plant_options);
@@ -214,7 +215,7 @@ Case cmu_case(const motion::Motion& src, const char* name) {
 void compare_linear_algebra(int n, int b) {
   std::mt19937 rng(1);
   std::uniform_real_distribution<double> u(-1, 1);
-  BandedCholesky band;
+  numerics::BandedCholesky band;
   band.reset(n, b);
   std::vector<Eigen::Triplet<double>> trip;
   for (int i = 0; i < n; ++i) {

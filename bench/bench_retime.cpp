@@ -78,7 +78,7 @@
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"
@@ -89,7 +89,7 @@
 #include "kg/retime/retime_clip.hpp"
 
 using namespace kg;
-using retime::BodyModel;
+using body::BodyModel;
 
 namespace {
 
@@ -148,8 +148,8 @@ double paired_ratio(int frames, const std::function<void(int)>& a, const std::fu
 
 // A rod of `mass` kg from the joint's origin to `tip` (joint frame): centre of mass halfway, inertia
 // of a cylinder of radius 4 cm.
-retime::SegmentInertia rod(double mass, const Eigen::Vector3d& tip) {
-  retime::SegmentInertia s;
+body::SegmentInertia rod(double mass, const Eigen::Vector3d& tip) {
+  body::SegmentInertia s;
   s.mass = mass;
   s.com = tip / 2;
   const double l = tip.norm(), r = 0.04;
@@ -191,7 +191,7 @@ struct Case {
 #ifdef KG_HAVE_KDL
 // The clip's q, q', q'' in KDL's joint order (DynamicsTopology's), converted once outside the timing.
 void kdl_frames(Case& c) {
-  const std::vector<int> order = retime::DynamicsTopology::of(*c.body.skeleton).order;
+  const std::vector<int> order = body::DynamicsTopology::of(*c.body.skeleton).order;
   const auto n = static_cast<unsigned>(order.size());
   for (int f = 0; f < c.clip.frame_count(); ++f) {
     std::array<KDL::JntArray, 3> a{KDL::JntArray(n), KDL::JntArray(n), KDL::JntArray(n)};
@@ -243,7 +243,7 @@ std::unique_ptr<Case> chain_case(int links) {
   // Three one-DOF segments per link; the third carries the rod (in its tip frame, 0.3 m down)
   // and the offset to the next link.
   auto chain = std::make_shared<KDL::Chain>();
-  const retime::SegmentInertia r = rod(2.0, {0, -kLink, 0});
+  const body::SegmentInertia r = rod(2.0, {0, -kLink, 0});
   const KDL::RigidBodyInertia inertia(
       r.mass, test::kdl(Eigen::Vector3d(r.com - Eigen::Vector3d(0, -kLink, 0))),
       KDL::RotationalInertia(r.inertia(0, 0), r.inertia(1, 1), r.inertia(2, 2), r.inertia(0, 1),
@@ -700,7 +700,7 @@ std::optional<Clip> load_clip(const std::string& name, const std::string& path, 
   c.what = what;
   t0 = now();
   const Eigen::RowVectorXd reference = c.clip.values.row(0);
-  c.body = retime::build_body_model(c.clip.skeleton, {}, &reference).body;
+  c.body = body::build_body_model(c.clip.skeleton, {}, &reference).body;
   c.body_ms = ms_since(t0);
   t0 = now();
   c.contacts = retime::detect_contacts(c.clip, {});
@@ -787,7 +787,7 @@ void heights(const motion::Motion& m, const BodyModel& body, std::vector<double>
   for (int f = 0; f < m.frame_count(); ++f) {
     motion::forward_kinematics(*m.skeleton, m.values.row(f), world);
     root.push_back(world[0].translation().y());
-    com.push_back(retime::body_com(body, m.values.row(f)).y());
+    com.push_back(body::body_com(body, m.values.row(f)).y());
   }
 }
 
@@ -1138,7 +1138,7 @@ int main(int argc, char** argv) {
     // The comparison is of equal work: the same torques, checked on every frame.
     std::printf("largest |τ − τ_KDL| / max|τ_KDL| over all frames:");
     for (const auto& c : cases) {
-      const std::vector<int> order = retime::DynamicsTopology::of(*c->body.skeleton).order;
+      const std::vector<int> order = body::DynamicsTopology::of(*c->body.skeleton).order;
       retime::DynamicsWorkspace ws;
       Eigen::VectorXd tau(c->clip.skeleton->channel_count());
       KDL::JntArray ktau(static_cast<unsigned>(order.size()));

@@ -1,5 +1,5 @@
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/nodes.hpp"
 
 namespace kg {
 

@@ -24,8 +24,8 @@
 #include <string>
 #include <vector>
 
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/file_patterns.hpp"
 #include "kg/graph/manifest.hpp"
@@ -243,8 +243,8 @@ constexpr int kStopSignals[] = {SIGINT, SIGTERM, SIGHUP};
 char g_partial_log[4096];
 
 extern "C" void item_interrupted(int sig) {
-  graph::remove_pending_temporaries();
-  graph::remove_written_files();
+  kg::remove_pending_temporaries();
+  kg::remove_written_files();
   if (g_partial_log[0]) ::unlink(g_partial_log);
   ::signal(sig, SIG_DFL);
   ::raise(sig);
@@ -341,8 +341,8 @@ bool write_all(int fd, const std::string& text) {
     }
     files.push_back(std::move(entry));
   };
-  for (const fs::path& written : graph::written_files()) record_file(written, r.outputs);
-  for (const fs::path& read : graph::input_files_read())
+  for (const fs::path& written : kg::written_files()) record_file(written, r.outputs);
+  for (const fs::path& read : kg::input_files_read())
     if (read != b.graph) record_file(read, r.reads);
   r.wall_seconds = since(start);
   r.finished_at = graph::utc_timestamp();
@@ -659,7 +659,7 @@ void compact_manifest(const fs::path& file, const std::vector<graph::ManifestRec
   const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
   std::map<std::string, const graph::ManifestRecord*> by_input;
   for (const graph::ManifestRecord& r : latest) by_input[r.input] = &r;
-  graph::write_file_atomically(file, [&](std::ostream& os) {
+  kg::write_file_atomically(file, [&](std::ostream& os) {
     std::set<std::string> written;
     for (const Item& item : items) {
       const auto it = by_input.find(item.input.string());

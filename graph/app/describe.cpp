@@ -5,13 +5,13 @@
 #include <sstream>
 #include <string>
 
-#include "kg/graph/json.hpp"
+#include "kg/base/json.hpp"
 #include "kg/graph/plugin_abi.hpp"
 
 namespace kg::app {
 namespace {
 
-using graph::JsonWriter;
+using kg::JsonWriter;
 using graph::ParamSpec;
 using graph::PortSpec;
 

@@ -6,8 +6,8 @@
 #include <iostream>
 #include <sstream>
 
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/yaml_io.hpp"
 
 namespace kg::app {
@@ -21,7 +21,7 @@ void warn(const std::string& message) {
 namespace {
 
 extern "C" void interrupted(int sig) {
-  graph::remove_pending_temporaries();
+  kg::remove_pending_temporaries();
   ::signal(sig, SIG_DFL);
   ::raise(sig);
 }
@@ -104,7 +104,7 @@ graph::Graph load_graph(Host& host, const fs::path& file, const std::map<std::st
   load_graph_plugins(host, file, sets);
   try {
     return graph::load_graph(file, host.registry, sets);
-  } catch (const graph::Error& e) {
+  } catch (const kg::Error& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, file.string() + ": " + e.what()};

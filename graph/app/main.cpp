@@ -14,7 +14,7 @@
 #include "batch.hpp"
 #include "describe.hpp"
 #include "host.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/plugin_abi.hpp"
 #include "kg/graph/plugin_loader.hpp"

@@ -3,7 +3,7 @@
 #include <charconv>
 #include <optional>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 
 namespace kg::app {
 namespace {
@@ -280,7 +280,7 @@ Options parse_options(int argc, const char* const* argv) {
   if (!verb) {
     std::vector<std::string> names;
     for (const VerbName& v : kVerbs) names.emplace_back(v.name);
-    const std::string near = kg::graph::nearest_name(verb_text, names);
+    const std::string near = kg::nearest_name(verb_text, names);
     throw UsageError("unknown verb '" + verb_text + "'" +
                      (near.empty() ? "" : "; did you mean '" + near + "'?"));
   }

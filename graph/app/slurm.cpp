@@ -8,7 +8,7 @@
 #include <string>
 
 #include "host.hpp"
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 namespace kg::app {
 namespace {
@@ -48,7 +48,7 @@ std::string directive(const std::string& value, const fs::path& folder = {},
 }
 
 void write_script(const fs::path& file, const std::string& text) {
-  graph::write_file_atomically(file, [&](std::ostream& os) { os << text; });
+  kg::write_file_atomically(file, [&](std::ostream& os) { os << text; });
   fs::permissions(file, fs::perms::owner_exec | fs::perms::group_exec | fs::perms::others_exec,
                   fs::perm_options::add);
 }
@@ -88,7 +88,7 @@ int write_slurm_jobs(const Options& o, const fs::path& graph, const fs::path& di
   fs::create_directories(logs, ec);
   if (ec) throw Failure{kExitUsage, "--out " + dir.string() + ": cannot create it: " + ec.message()};
 
-  graph::write_file_atomically(list, [&](std::ostream& os) {
+  kg::write_file_atomically(list, [&](std::ostream& os) {
     for (const fs::path& input : inputs) os << input.string() << '\n';
   });
 

@@ -8,8 +8,8 @@
 #include <set>
 #include <thread>
 
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/json.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/json.hpp"
 
 namespace kg::graph {
 

@@ -10,8 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/json.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/json.hpp"
 #include "kg/graph/sha256.hpp"
 
 namespace kg::graph {

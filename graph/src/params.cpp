@@ -2,8 +2,8 @@
 
 #include <stdexcept>
 
-#include "kg/graph/json.hpp"
-#include "number_text.hpp"
+#include "kg/base/json.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::graph {
 
@@ -33,13 +33,13 @@ std::string to_string(const ParamValue& value) {
   struct Visitor {
     std::string operator()(bool b) const { return b ? "true" : "false"; }
     std::string operator()(std::int64_t i) const { return std::to_string(i); }
-    std::string operator()(double d) const { return detail::format_double(d); }
+    std::string operator()(double d) const { return text::format_double(d); }
     std::string operator()(const std::string& s) const { return json_quote(s); }
     std::string operator()(const std::vector<double>& list) const {
       std::string s = "[";
       for (std::size_t i = 0; i < list.size(); ++i) {
         if (i) s += ", ";
-        s += detail::format_double(list[i]);
+        s += text::format_double(list[i]);
       }
       return s + "]";
     }

@@ -22,7 +22,7 @@
 
 #include <boost/dll/shared_library.hpp>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/plugin_abi.hpp"
 
 namespace kg::graph {

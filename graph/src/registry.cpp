@@ -4,7 +4,7 @@
 #include <cctype>
 #include <set>
 
-#include "number_text.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::graph {
 

@@ -3,7 +3,7 @@
 // 0-based; ours are 1-based).
 #include "kg/graph/yaml_io.hpp"
 
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -16,7 +16,7 @@
 #include <sstream>
 #include <system_error>
 
-#include "number_text.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::graph {
 
@@ -288,7 +288,7 @@ struct Head {
 };
 
 std::optional<bool> parse_bool(std::string text) {
-  text = std::string(detail::trim(text));
+  text = std::string(text::trim(text));
   for (char& c : text) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
   if (text == "true" || text == "yes" || text == "1" || text == "on") return true;
   if (text == "false" || text == "no" || text == "0" || text == "off") return false;
@@ -309,7 +309,7 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
            L.at(h.root));
   const std::string vtext =
       version->value.IsScalar() ? version->value.Scalar() : std::string(kind_of(version->value));
-  const auto v = detail::parse_int(vtext);
+  const auto v = text::parse_int(vtext);
   if (!version->value.IsScalar() || !v || *v != kGraphFormatVersion)
     L.fail("unsupported graph format version " + in_quotes(vtext) + "; this kinegraph reads version " +
                std::to_string(kGraphFormatVersion),
@@ -377,7 +377,7 @@ Head read_head(const Loader& L, Variables& vars, const std::string& text,
         L.fail(in_quotes(path) + " must be a plugin name or path, got " + kind_of(item), L.at(item));
       std::string entry = vars.substitute(item.Scalar(), L.at(item));
       // An entry that is empty after substitution is an optional plugin left out.
-      if (!detail::trim(entry).empty()) h.plugins.push_back({std::move(entry), L.at(item)});
+      if (!text::trim(entry).empty()) h.plugins.push_back({std::move(entry), L.at(item)});
     }
   }
   return h;
@@ -405,7 +405,7 @@ class ParamReader {
           if (!item.IsScalar())
             L_.fail(who + ": element " + std::to_string(i) + " must be a number, got " + kind_of(item), at);
           const std::string text = vars_.substitute(item.Scalar(), at);
-          const auto x = detail::parse_double(text);
+          const auto x = text::parse_double(text);
           if (!x)
             L_.fail(who + ": element " + std::to_string(i) + " is " + shown(text, item.Scalar()) +
                         ", not a number",
@@ -434,13 +434,13 @@ class ParamReader {
         return *b;
       }
       case ParamType::Int: {
-        const auto i = detail::parse_int(text);
+        const auto i = text::parse_int(text);
         if (!i) L_.fail(who + " expects an int, got " + shown(text, raw), where);
         check_range(p, static_cast<double>(*i), who, where);
         return *i;
       }
       case ParamType::Float: {
-        const auto x = detail::parse_double(text);
+        const auto x = text::parse_double(text);
         if (!x) L_.fail(who + " expects a float, got " + shown(text, raw), where);
         check_range(p, *x, who, where);
         return *x;
@@ -486,11 +486,11 @@ class ParamReader {
   // "0,-9.81,0", "[0, -9.81, 0]", "0 -9.81 0" or one number, typically from a variable.
   std::vector<double> parse_list(const std::string& who, const std::string& text, const std::string& raw,
                                  const SourceLocation& where) const {
-    std::string_view body = detail::trim(text);
+    std::string_view body = text::trim(text);
     if (!body.empty() && body.front() == '[') {
       if (body.back() != ']')
         L_.fail(who + " expects a list of numbers, got " + shown(text, raw) + " (no closing ']')", where);
-      body = detail::trim(body.substr(1, body.size() - 2));
+      body = text::trim(body.substr(1, body.size() - 2));
     }
     std::vector<double> list;
     std::vector<std::string> items;
@@ -499,7 +499,7 @@ class ParamReader {
       while (true) {
         const std::size_t comma = body.find(',', from);
         const std::string_view item =
-            detail::trim(body.substr(from, comma == std::string_view::npos ? body.npos : comma - from));
+            text::trim(body.substr(from, comma == std::string_view::npos ? body.npos : comma - from));
         if (item.empty())
           L_.fail(who + " expects a list of numbers, got " + shown(text, raw) + " (an empty element)", where);
         items.emplace_back(item);
@@ -511,7 +511,7 @@ class ParamReader {
       for (std::string w; words >> w;) items.push_back(w);
     }
     for (std::size_t i = 0; i < items.size(); ++i) {
-      const auto x = detail::parse_double(items[i]);
+      const auto x = text::parse_double(items[i]);
       if (!x)
         L_.fail(who + " expects a list of numbers; element " + std::to_string(i) + " " + in_quotes(items[i]) +
                     " of " + shown(text, raw) + " is not a number",
@@ -524,7 +524,7 @@ class ParamReader {
   void check_range(const ParamSpec& p, double x, const std::string& who, const SourceLocation& where) const {
     auto show = [&](double v) {
       return p.type == ParamType::Int ? std::to_string(static_cast<std::int64_t>(v))
-                                      : detail::format_double(v);
+                                      : text::format_double(v);
     };
     if (p.min && x < *p.min)
       L_.fail(who + " is " + show(x) + ", below its minimum " + show(*p.min) + range_text(p, show), where);
@@ -582,7 +582,7 @@ void check_paths(const Loader& L, const Graph& g, const Registry& registry, cons
       if (p.type != ParamType::InputPath && p.type != ParamType::OutputPath) continue;
       if (!g.nodes[i].params.has(p.name)) continue;
       const std::string& text = g.nodes[i].params.get<std::string>(p.name);
-      if (detail::trim(text).empty()) continue;
+      if (text::trim(text).empty()) continue;
       (p.type == ParamType::InputPath ? inputs : outputs).push_back({i, p.name, text, canonical_text(text)});
     }
   }

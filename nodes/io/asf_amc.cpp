@@ -1,7 +1,7 @@
 // ASF and AMC parsers (see kg/io/asf_amc.hpp for the mapping onto skeleton.hpp).
 #include "kg/io/asf_amc.hpp"
 
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 #include <algorithm>
 #include <array>
@@ -15,7 +15,7 @@
 #include <sstream>
 #include <unordered_map>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 
 namespace kg::io {
 
@@ -110,7 +110,7 @@ class Lines {
   const std::string& path() const { return path_; }
 
   [[noreturn]] void fail(int line, int column, const std::string& message) const {
-    throw graph::Error(message, {path_, line, column});
+    throw kg::Error(message, {path_, line, column});
   }
   // "expected <what>, got <token i | end of line | end of file>".
   [[noreturn]] void expected(const std::string& what, std::size_t i) const {
@@ -238,7 +238,7 @@ class AsfParser {
       static const std::vector<std::string> kSections{":version", ":name",     ":units",    ":documentation",
                                                       ":root",    ":bonedata", ":hierarchy"};
       if (std::find(kSections.begin(), kSections.end(), keyword) == kSections.end()) {
-        std::string hint = graph::nearest_name(keyword, kSections);
+        std::string hint = kg::nearest_name(keyword, kSections);
         lines_.expected(
             "a section keyword (:version, :name, :units, :documentation, :root, :bonedata, :hierarchy)" +
                 (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
@@ -446,7 +446,7 @@ class AsfParser {
       } else {
         static const std::vector<std::string> kKeys{"id",  "name",   "direction", "length",  "axis",
                                                     "dof", "limits", "bodymass",  "cofmass", "end"};
-        std::string hint = graph::nearest_name(key, kKeys);
+        std::string hint = kg::nearest_name(key, kKeys);
         lines_.expected("a bone field (id, name, direction, length, axis, dof, limits, end)" +
                             (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
                         0);
@@ -546,7 +546,7 @@ class AsfParser {
   [[noreturn]] void fail_unknown_bone(const std::string& name, int line, int column) {
     std::vector<std::string> names{"root"};
     for (const RawBone& b : bones_) names.push_back(b.name);
-    std::string hint = graph::nearest_name(name, names);
+    std::string hint = kg::nearest_name(name, names);
     lines_.fail(line, column,
                 "expected a bone of :bonedata, got " + show(name) +
                     (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"));
@@ -716,7 +716,7 @@ class AsfParser {
 };
 
 std::string read_text(const std::string& path, const char* what) {
-  return graph::read_input_file(path, std::string(what) + " file");
+  return kg::read_input_file(path, std::string(what) + " file");
 }
 
 bool is_integer(std::string_view t) {
@@ -807,7 +807,7 @@ motion::Motion parse_amc(std::string_view text, const std::string& path, const A
       if (it == index.end()) {
         std::vector<std::string> names;
         for (const AsfBone& b : asf.bones) names.push_back(b.name);
-        std::string hint = graph::nearest_name(std::string(name.text), names);
+        std::string hint = kg::nearest_name(std::string(name.text), names);
         lines.expected("a bone of " + asf.path + " or a frame number" +
                            (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
                        0);

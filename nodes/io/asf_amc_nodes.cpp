@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "kg/builtin_nodes.hpp"
+#include "kg/io/nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 
 namespace kg {

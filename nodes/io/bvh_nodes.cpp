@@ -3,7 +3,8 @@
 #include <string>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/atomic_file.hpp"
+#include "kg/io/nodes.hpp"
+#include "kg/base/atomic_file.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 
@@ -51,7 +52,7 @@ class ExportBvhNode final : public graph::Node {
 
   void run(graph::RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
-    graph::write_file_atomically(path_, [&](std::ostream& os) { io::write_bvh(os, m, options_); });
+    kg::write_file_atomically(path_, [&](std::ostream& os) { io::write_bvh(os, m, options_); });
     ctx.report("path", path_);
     ctx.report("frames", static_cast<std::int64_t>(m.frame_count()));
     ctx.report("units",

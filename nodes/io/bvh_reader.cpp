@@ -12,16 +12,16 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/io/bvh.hpp"
 
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 namespace kg::io {
 namespace {
 
-using graph::Error;
-using graph::SourceLocation;
+using kg::Error;
+using kg::SourceLocation;
 using motion::ChannelKind;
 
 // Deeper nesting than any figure has; the limit keeps a hostile file from exhausting the stack.
@@ -450,7 +450,7 @@ BvhClip parse_bvh(std::string_view text, const std::string& file_name) {
 }
 
 BvhClip read_bvh(const std::filesystem::path& path) {
-  return parse_bvh(graph::read_input_file(path, "BVH file"), path.string());
+  return parse_bvh(kg::read_input_file(path, "BVH file"), path.string());
 }
 
 ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions& options) {

@@ -118,36 +118,6 @@ std::string up_axis_name(const Eigen::Matrix3d& file_to_world) {
   return "custom";
 }
 
-std::vector<graph::ParamSpec> import_option_params(const std::string& default_units) {
-  check_units_name(default_units, true);
-  using graph::ParamType;
-  return {
-      {.name = "units",
-       .type = ParamType::Enum,
-       .default_value = default_units,
-       .doc = "length unit of the file: auto (the file's declaration, else guessed from the standing height, "
-              "and said so), m, cm, mm, inch, asf (2.54/45 m, ASF's length 0.45)",
-       .choices = {"auto", "m", "cm", "mm", "inch", "asf"}},
-      {.name = "up",
-       .type = ParamType::Enum,
-       .default_value = std::string("auto"),
-       .doc = "file axis pointing up: auto (from frame 0's extents, said so), y, z (rotated to +Y)",
-       .choices = {"auto", "y", "z"}},
-      {.name = "fps",
-       .type = ParamType::Float,
-       .default_value = 0.0,
-       .doc = "frames per second overriding the file's (files lie); 0 keeps the file's",
-       .min = 0.0}};
-}
-
-ImportOptions import_options_from(const graph::Params& params) {
-  ImportOptions o;
-  o.units = params.get<std::string>("units");
-  o.up = params.get<std::string>("up");
-  o.fps = params.get<double>("fps");
-  return o;
-}
-
 std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOptions& options,
                                               double file_fps, const std::string& file_name,
                                               double declared_metres_per_unit) {

@@ -5,6 +5,7 @@
 #include <stdexcept>
 
 #include "kg/builtin_nodes.hpp"
+#include "kg/motion/nodes.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/motion/resample.hpp"
 

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "kg/base/error.hpp"
 #include "kg/motion/rotations.hpp"
 
 namespace kg::motion {
@@ -125,6 +126,26 @@ double Skeleton::rest_height() const {
     for (const Eigen::Vector3d& e : jt.end_sites) extend(origin[j] + e);
   }
   return hi - lo;
+}
+
+std::string nearest_joint_name(const Skeleton& sk, const std::string& name) {
+  auto lower = [](std::string t) {
+    for (char& ch : t) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+    return t;
+  };
+  const std::string want = lower(name);
+  std::string prefix, contains;
+  std::vector<std::string> names;
+  for (const Joint& j : sk.joints()) {
+    names.push_back(j.name);
+    if (want.empty()) continue;
+    const std::string n = lower(j.name);
+    if (n.rfind(want, 0) == 0 && (prefix.empty() || j.name.size() < prefix.size())) prefix = j.name;
+    if (n.find(want) != std::string::npos && (contains.empty() || j.name.size() < contains.size())) contains = j.name;
+  }
+  if (!prefix.empty()) return prefix;
+  if (!contains.empty()) return contains;
+  return kg::nearest_name(name, names);
 }
 
 }  // namespace kg::motion

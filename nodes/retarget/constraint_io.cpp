@@ -2,7 +2,7 @@
 // error at file:line:column.
 #include "kg/retarget/constraint_io.hpp"
 
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -15,15 +15,15 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "kg/graph/error.hpp"
-#include "kg/graph/yaml_reader.hpp"
+#include "kg/base/error.hpp"
+#include "kg/base/yaml_reader.hpp"
 
 namespace kg::retarget {
 
 namespace {
 
-using graph::Error;
-using graph::SourceLocation;
+using kg::Error;
+using kg::SourceLocation;
 
 std::string join(const std::vector<std::string>& names) {
   std::string out;
@@ -31,7 +31,7 @@ std::string join(const std::vector<std::string>& names) {
   return out;
 }
 
-class Reader : public graph::YamlReader {
+class Reader : public kg::YamlReader {
  public:
   Reader(std::string file, std::span<const motion::Motion> characters)
       : YamlReader(std::move(file)), chars_(characters) {}
@@ -95,7 +95,7 @@ class Reader : public graph::YamlReader {
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
     std::string msg = "unknown joint '" + name + "'";
-    const std::string near = nearest_joint_name(sk, name);
+    const std::string near = motion::nearest_joint_name(sk, name);
     if (!near.empty()) msg += " (nearest: '" + near + "')";
     if (chars_.size() > 1) msg += " in character " + std::to_string(character);
     fail(msg, n.Mark());
@@ -149,7 +149,7 @@ class Reader : public graph::YamlReader {
     const int j = sk.find_joint(joint_name);
     if (j < 0) {
       std::string msg = "unknown joint '" + joint_name + "'";
-      const std::string near = nearest_joint_name(sk, joint_name);
+      const std::string near = motion::nearest_joint_name(sk, joint_name);
       if (!near.empty()) msg += " (nearest: '" + near + "')";
       fail(msg, n.Mark());
     }
@@ -297,7 +297,7 @@ class Reader : public graph::YamlReader {
         if (std::regex_match(sk.joint(j).name, re)) joints.push_back(j);
       if (joints.empty()) {
         std::string msg = "limits: '" + pattern + "' matches no joint";
-        const std::string near = graph::nearest_name(pattern, names);
+        const std::string near = kg::nearest_name(pattern, names);
         if (!near.empty()) msg += " (nearest: '" + near + "')";
         fail(msg, it->first.Mark());
       }
@@ -340,26 +340,6 @@ class Reader : public graph::YamlReader {
 
 }  // namespace
 
-std::string nearest_joint_name(const motion::Skeleton& sk, const std::string& name) {
-  auto lower = [](std::string t) {
-    for (char& ch : t) ch = static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
-    return t;
-  };
-  const std::string want = lower(name);
-  std::string prefix, contains;
-  std::vector<std::string> names;
-  for (const motion::Joint& j : sk.joints()) {
-    names.push_back(j.name);
-    if (want.empty()) continue;
-    const std::string n = lower(j.name);
-    if (n.rfind(want, 0) == 0 && (prefix.empty() || j.name.size() < prefix.size())) prefix = j.name;
-    if (n.find(want) != std::string::npos && (contains.empty() || j.name.size() < contains.size())) contains = j.name;
-  }
-  if (!prefix.empty()) return prefix;
-  if (!contains.empty()) return contains;
-  return graph::nearest_name(name, names);
-}
-
 ConstraintSet read_constraints_string(const std::string& text, const std::string& file_name,
                                       std::span<const motion::Motion> characters) {
   for (const motion::Motion& m : characters)
@@ -368,7 +348,7 @@ ConstraintSet read_constraints_string(const std::string& text, const std::string
 }
 
 ConstraintSet read_constraints_file(const std::string& path, std::span<const motion::Motion> characters) {
-  return read_constraints_string(graph::read_input_file(path, "constraint file"), path, characters);
+  return read_constraints_string(kg::read_input_file(path, "constraint file"), path, characters);
 }
 
 ConstraintSet joint_limit_constraints(const motion::Skeleton& sk, int character, int frames) {

@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace kg::retarget {
@@ -464,7 +464,7 @@ std::vector<std::string> ConstraintKindTable::names() const {
 namespace {
 [[noreturn]] void throw_unknown_kind(const Constraint& c, const std::vector<std::string>& known) {
   std::string msg = "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + join(known);
-  const std::string near = graph::nearest_name(c.kind, known);
+  const std::string near = kg::nearest_name(c.kind, known);
   if (!near.empty()) msg += "; did you mean '" + near + "'?";
   throw std::invalid_argument(msg + ")");
 }
@@ -484,35 +484,12 @@ ConstraintKindTable kinds_for(const ConstraintSet& set, const ConstraintKindLook
   return table;
 }
 
-ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::RunContext& ctx) {
-  return kinds_for(set, [&ctx](const std::string& name) { return ctx.find_extension(kConstraintKindInterface, name); });
-}
-
-ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::Registry& registry) {
-  return kinds_for(set, [&registry](const std::string& name) {
-    return registry.find_extension(kConstraintKindInterface, name);
-  });
-}
-
 void check_constraints(const ConstraintSet& set, const ConstraintKindTable& kinds) {
   for (const Constraint& c : set.constraints) {
     const ConstraintKind* kind = kinds.find(c.kind);
     if (kind == nullptr) throw_unknown_kind(c, kinds.names());
     kind->check(c);
   }
-}
-
-std::vector<graph::Extension> builtin_constraint_kind_extensions() {
-  std::vector<graph::Extension> out;
-  for (std::shared_ptr<const ConstraintKind> k : builtin_kinds()) {
-    graph::Extension e;
-    e.interface = kConstraintKindInterface;
-    e.name = k->name();
-    e.doc = k->doc();
-    e.factory = std::shared_ptr<const void>(std::move(k));
-    out.push_back(std::move(e));
-  }
-  return out;
 }
 
 // ---- evaluation ------------------------------------------------------------------------------

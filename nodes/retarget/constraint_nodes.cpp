@@ -7,6 +7,7 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/footplants.hpp"
 #include "kg/retarget/holds.hpp"
@@ -49,14 +50,14 @@ const graph::PortSpec kConstraintsOut{"constraints", "kg.Constraints", true,
 class FootplantsNode final : public Node {
  public:
   explicit FootplantsNode(const Params& p) {
-    detect_.points = retarget::split_names(p.get<std::string>("points"));
+    detect_.points = motion::split_names(p.get<std::string>("points"));
     detect_.height_threshold = p.get<double>("height_threshold");
     detect_.speed_threshold = p.get<double>("speed_threshold");
     detect_.hysteresis = p.get<double>("hysteresis");
     detect_.min_duration_s = p.get<double>("min_duration_s");
     detect_.trim_distance = p.get<double>("trim_distance");
     detect_.rest_window_s = p.get<double>("rest_window_s");
-    detect_.floor = retarget::parse_floor(p.get<std::string>("floor"));
+    detect_.floor = motion::parse_floor(p.get<std::string>("floor"));
     detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
                                                              : retarget::PlantFlavour::Fixed;
@@ -65,19 +66,19 @@ class FootplantsNode final : public Node {
 
   void run(RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
-    const retarget::FootplantDetection d = retarget::detect_footplants(m, detect_);
+    const motion::FootplantDetection d = motion::detect_footplants(m, detect_);
     for (const std::string& note : d.notes) ctx.log(note);
     for (std::size_t i = 0; i < d.points.size(); ++i)
       ctx.report("plants." + d.points[i].name, static_cast<std::int64_t>(d.count(static_cast<int>(i))));
     ctx.report("plants", static_cast<std::int64_t>(d.plants.size()));
     ctx.report("floor_m", d.floor);
     double skate = 0;
-    for (const retarget::Footplant& p : d.plants) skate = std::max(skate, p.skate);
+    for (const motion::Footplant& p : d.plants) skate = std::max(skate, p.skate);
     ctx.report("source_skate_max_m", skate);
     retarget::PlantConstraintOptions make = make_;
     if (ctx.has_input("target")) {
       make.height_scale = retarget::plant_height_scale(ctx.input<retarget::Target>("target"), m.fps);
-      for (const retarget::PlantPoint& p : d.points)
+      for (const motion::PlantPoint& p : d.points)
         ctx.report("height_scale." + p.name, make.height_scale(p.point, 0));
     }
     retarget::ConstraintSet set = retarget::footplant_constraints(d, m.frame_count(), make);
@@ -86,7 +87,7 @@ class FootplantsNode final : public Node {
   }
 
  private:
-  retarget::FootplantOptions detect_;
+  motion::FootplantOptions detect_;
   retarget::PlantConstraintOptions make_;
 };
 
@@ -237,8 +238,8 @@ NodeType constraints_type() {
 class HoldsNode final : public Node {
  public:
   explicit HoldsNode(const Params& p) : weight_(p.get<double>("weight")) {
-    options_.points_a = retarget::split_names(p.get<std::string>("points"));
-    options_.points_b = retarget::split_names(p.get<std::string>("points2"));
+    options_.points_a = motion::split_names(p.get<std::string>("points"));
+    options_.points_b = motion::split_names(p.get<std::string>("points2"));
     options_.max_distance = p.get<double>("max_distance");
     options_.hysteresis = p.get<double>("hysteresis");
     options_.min_duration_s = p.get<double>("min_duration_s");

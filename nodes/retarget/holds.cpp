@@ -25,9 +25,9 @@ HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, con
   if (!(o.min_duration_s >= 0) || !std::isfinite(o.min_duration_s))
     throw std::invalid_argument("holds: min_duration_s must be >= 0");
   HoldDetection d;
-  for (const std::string& spec : o.points_a) d.points_a.push_back(find_point(*a.skeleton, spec, 0, "holds"));
-  for (const std::string& spec : o.points_b) d.points_b.push_back(find_point(*b.skeleton, spec, 1, "holds"));
-  const std::vector<Eigen::Vector3d> pa = point_positions(a, d.points_a), pb = point_positions(b, d.points_b);
+  for (const std::string& spec : o.points_a) d.points_a.push_back(motion::find_point(*a.skeleton, spec, 0, "holds"));
+  for (const std::string& spec : o.points_b) d.points_b.push_back(motion::find_point(*b.skeleton, spec, 1, "holds"));
+  const std::vector<Eigen::Vector3d> pa = motion::point_positions(a, d.points_a), pb = motion::point_positions(b, d.points_b);
   const int frames = a.frame_count();
   const int min_frames = std::max(1, static_cast<int>(std::ceil(o.min_duration_s * a.fps - 1e-9)));
   d.closest = std::numeric_limits<double>::infinity();
@@ -68,8 +68,8 @@ ConstraintSet hold_constraints(const HoldDetection& d, double weight) {
   ConstraintSet set;
   std::vector<int> numbers(d.points_a.size() * d.points_b.size(), 0);
   for (const HoldSpan& h : d.holds) {
-    const PlantPoint& a = d.points_a[static_cast<std::size_t>(h.point_a)];
-    const PlantPoint& b = d.points_b[static_cast<std::size_t>(h.point_b)];
+    const motion::PlantPoint& a = d.points_a[static_cast<std::size_t>(h.point_a)];
+    const motion::PlantPoint& b = d.points_b[static_cast<std::size_t>(h.point_b)];
     const int n = ++numbers[static_cast<std::size_t>(h.point_a) * d.points_b.size() + static_cast<std::size_t>(h.point_b)];
     Constraint c;
     c.kind = "distance";

@@ -11,7 +11,7 @@
 #include <stdexcept>
 #include <tuple>
 
-#include "kg/graph/json.hpp"
+#include "kg/base/json.hpp"
 
 namespace kg::retarget {
 namespace {
@@ -344,7 +344,7 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
 }
 
 namespace {
-void write_jerk(graph::JsonWriter& w, const JerkFigures& j) {
+void write_jerk(kg::JsonWriter& w, const JerkFigures& j) {
   w.begin_object();
   w.field("translation_m_per_s3", j.translation);
   w.field("rotation_rad_per_s3", j.rotation);
@@ -352,7 +352,7 @@ void write_jerk(graph::JsonWriter& w, const JerkFigures& j) {
   w.field("rotation_channels", j.rotation_channels);
   w.end_object();
 }
-void write_band(graph::JsonWriter& w, const BandEnergy& b) {
+void write_band(kg::JsonWriter& w, const BandEnergy& b) {
   w.begin_object();
   w.field("fraction", b.fraction);
   w.field("above", b.above);
@@ -363,7 +363,7 @@ void write_band(graph::JsonWriter& w, const BandEnergy& b) {
 }  // namespace
 
 void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
-  graph::JsonWriter w(os);
+  kg::JsonWriter w(os);
   w.begin_object();
   w.field("version", 1);
   w.field("motion", m.motion_name);

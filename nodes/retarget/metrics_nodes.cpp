@@ -4,7 +4,8 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/atomic_file.hpp"
+#include "kg/retarget/nodes.hpp"
+#include "kg/base/atomic_file.hpp"
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
@@ -71,7 +72,7 @@ class MetricsNode final : public graph::Node {
     } else {
       write_metrics_json(text, m);
     }
-    if (!path_.empty()) graph::write_file_atomically(path_, [&](std::ostream& os) { os << text.str(); });
+    if (!path_.empty()) kg::write_file_atomically(path_, [&](std::ostream& os) { os << text.str(); });
     ctx.output("json", text.str());
   }
 

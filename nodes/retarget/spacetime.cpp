@@ -11,6 +11,7 @@
 #include <string>
 
 #include "kg/motion/kinematics.hpp"
+#include "kg/numerics/banded_cholesky.hpp"
 
 namespace kg::retarget {
 
@@ -268,7 +269,7 @@ class Pass {
                                                   static_cast<Eigen::Index>(p.channels.size()));
         for (std::size_t i = 0; i < p.channels.size(); ++i) {
           const int c = p.channels[i];
-          const BasisAt& b = ch.layout.basis(c, p.frame);
+          const motion::BasisAt& b = ch.layout.basis(c, p.frame);
           for (int q = 0; q < 4; ++q)
             J.col(ch.x_offset + ch.layout.unknown(c, b.first + q)).segment(s.row_offset, s.rows) +=
                 w * b.weight[static_cast<std::size_t>(q)] * G.col(static_cast<Eigen::Index>(i));
@@ -480,7 +481,7 @@ class Pass {
     for (const Piece& p : s.pieces) {
       const Character& ch = chars_[static_cast<std::size_t>(p.character)];
       for (int c : p.channels) {
-        const BasisAt& basis = ch.layout.basis(c, p.frame);
+        const motion::BasisAt& basis = ch.layout.basis(c, p.frame);
         for (int q = 0; q < 4; ++q) {
           const int u = band_index(ch, c, basis.first + q);
           if (u < 0) {
@@ -510,7 +511,7 @@ class Pass {
         for (std::size_t i = 0; i < p.channels.size(); ++i) {
           const double gi = w * G(r, static_cast<Eigen::Index>(i));
           if (gi == 0) continue;
-          const BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
+          const motion::BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
           for (int q = 0; q < 4; ++q)
             rows_dense_(k, local_column_[static_cast<std::size_t>(band_index(ch, p.channels[i], basis.first + q))]) +=
                 gi * basis.weight[static_cast<std::size_t>(q)];
@@ -597,7 +598,7 @@ class Pass {
       const Character& ch = chars_[static_cast<std::size_t>(g.character)];
       int lo = INT32_MAX, hi = -1;
       for (int c : g.touched) {
-        const BasisAt& basis = ch.layout.basis(c, g.frame);
+        const motion::BasisAt& basis = ch.layout.basis(c, g.frame);
         lo = std::min(lo, band_index(ch, c, basis.first));
         hi = std::max(hi, band_index(ch, c, basis.first + 3));
       }
@@ -610,7 +611,7 @@ class Pass {
       for (const Piece& p : s.pieces) {
         const Character& ch = chars_[static_cast<std::size_t>(p.character)];
         for (int c : p.channels) {
-          const BasisAt& basis = ch.layout.basis(c, p.frame);
+          const motion::BasisAt& basis = ch.layout.basis(c, p.frame);
           lo = std::min(lo, band_index(ch, c, basis.first));
           hi = std::max(hi, band_index(ch, c, basis.first + 3));
         }
@@ -649,7 +650,7 @@ class Pass {
       }
       int ia[4], ib[4];
       for (int a : g.touched) {
-        const BasisAt& ba = ch.layout.basis(a, g.frame);
+        const motion::BasisAt& ba = ch.layout.basis(a, g.frame);
         for (int p = 0; p < 4; ++p) {
           ia[p] = band_index(ch, a, ba.first + p);
           grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
@@ -657,7 +658,7 @@ class Pass {
         for (int bc : g.touched) {
           const double nab = ch.normal(a, bc);
           if (nab == 0) continue;
-          const BasisAt& bb = ch.layout.basis(bc, g.frame);
+          const motion::BasisAt& bb = ch.layout.basis(bc, g.frame);
           for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
           for (int p = 0; p < 4; ++p) {
             const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
@@ -717,11 +718,11 @@ class Pass {
   std::vector<int> columns_;       // add_rows: band indexes the sample touches, in first-seen order
   Eigen::MatrixXd rows_dense_;     // add_rows: taken rows x columns, weighted
   Eigen::VectorXd rho_weighted_;
-  BandedCholesky saved_band_;      // the last step's matrix before factoring (lambda included)
+  numerics::BandedCholesky saved_band_;      // the last step's matrix before factoring (lambda included)
   Eigen::VectorXd saved_grad_;
   std::vector<char> held_at_save_;  // held_ when it was assembled
   bool saved_valid_ = false;
-  BandedCholesky band_;
+  numerics::BandedCholesky band_;
   Eigen::VectorXd grad_;
 };
 
@@ -859,72 +860,6 @@ std::string format_length(double metres, bool in_metres) {
 }
 
 }  // namespace
-
-void BandedCholesky::reset(int n, int b) {
-  n_ = n;
-  b_ = b;
-  data_.assign(static_cast<std::size_t>(n) * static_cast<std::size_t>(b + 1), 0.0);
-}
-
-namespace {
-// Four independent sums: the adds pipeline instead of each waiting on the last.
-inline double dot4(const double* a, const double* b, int n) {
-  double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-  int k = 0;
-  for (; k + 4 <= n; k += 4) {
-    s0 += a[k] * b[k];
-    s1 += a[k + 1] * b[k + 1];
-    s2 += a[k + 2] * b[k + 2];
-    s3 += a[k + 3] * b[k + 3];
-  }
-  for (; k < n; ++k) s0 += a[k] * b[k];
-  return (s0 + s1) + (s2 + s3);
-}
-}  // namespace
-
-// The factor is most of a solve's time: on x86-64 an AVX2 version is chosen at run time where
-// the CPU has it (measured 22% faster here), the baseline build everywhere else.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-__attribute__((target_clones("avx2", "default")))
-#endif
-bool BandedCholesky::factor() {
-  const int w = b_ + 1;
-  for (int i = 0; i < n_; ++i) {
-    double* Li = data_.data() + static_cast<std::size_t>(i) * w;
-    const int j0 = std::max(0, i - b_);
-    for (int j = j0; j <= i; ++j) {
-      const double* Lj = data_.data() + static_cast<std::size_t>(j) * w;
-      const int len = j - j0;
-      double s = Li[j - i + b_];
-      if (len > 0) s -= dot4(Li + (j0 - i + b_), Lj + (j0 - j + b_), len);
-      if (j < i) {
-        Li[j - i + b_] = s / Lj[b_];
-      } else {
-        if (!(s > 0)) return false;
-        Li[b_] = std::sqrt(s);
-      }
-    }
-  }
-  return true;
-}
-
-void BandedCholesky::solve(Eigen::VectorXd& y) const {
-  const int w = b_ + 1;
-  for (int i = 0; i < n_; ++i) {
-    const double* Li = data_.data() + static_cast<std::size_t>(i) * w;
-    const int j0 = std::max(0, i - b_);
-    double s = y[i];
-    if (i > j0) s -= Eigen::Map<const Eigen::VectorXd>(Li + (j0 - i + b_), i - j0).dot(y.segment(j0, i - j0));
-    y[i] = s / Li[b_];
-  }
-  for (int i = n_ - 1; i >= 0; --i) {
-    const double* Li = data_.data() + static_cast<std::size_t>(i) * w;
-    y[i] /= Li[b_];
-    const double yi = y[i];
-    const int j0 = std::max(0, i - b_);
-    for (int j = j0; j < i; ++j) y[j] -= Li[j - i + b_] * yi;
-  }
-}
 
 const char* to_string(SpacetimeStatus status) {
   return status == SpacetimeStatus::Converged ? "converged" : "not converged";

@@ -9,20 +9,20 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "kg/graph/error.hpp"
-#include "kg/graph/yaml_reader.hpp"
+#include "kg/base/error.hpp"
+#include "kg/base/yaml_reader.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 #include "kg/retarget/target.hpp"
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 
 namespace kg::retarget {
 
 namespace {
 
-using graph::Error;
-using graph::SourceLocation;
+using kg::Error;
+using kg::SourceLocation;
 using motion::Skeleton;
 
 std::string in_quotes(const std::string& s) {
@@ -41,7 +41,7 @@ std::string fmt(double v) {
   return s.str();
 }
 
-class Reader : public graph::YamlReader {
+class Reader : public kg::YamlReader {
  public:
   Reader(const Skeleton& source, std::string path) : YamlReader(std::move(path)), source_(source) {}
 
@@ -192,7 +192,7 @@ LoadedTarget load_target(std::shared_ptr<const Skeleton> source, const std::stri
   if (!source) throw std::invalid_argument("load_target: no source skeleton");
   const std::string ext = lower_extension(path);
   if (ext == ".yaml" || ext == ".yml") {
-    return parse_target_yaml(std::move(source), graph::read_input_file(path, "target file"), path);
+    return parse_target_yaml(std::move(source), kg::read_input_file(path, "target file"), path);
   }
   LoadedTarget out;
   out.kind = "skeleton";

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/key_spacing.hpp"

@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
+#include "kg/retime/nodes.hpp"
 #include "kg/retime/contacts.hpp"
 
 namespace kg {
@@ -23,7 +24,7 @@ using graph::RunContext;
 class ContactsNode final : public Node {
  public:
   explicit ContactsNode(const Params& p) : path_(p.get<std::string>("path")) {
-    options_.feet = retarget::split_names(p.get<std::string>("feet"));
+    options_.feet = motion::split_names(p.get<std::string>("feet"));
     options_.heel_ratio = p.get<double>("heel_ratio");
     options_.width_ratio = p.get<double>("width_ratio");
     options_.plants.height_threshold = p.get<double>("height_threshold");
@@ -31,7 +32,7 @@ class ContactsNode final : public Node {
     options_.plants.hysteresis = p.get<double>("hysteresis");
     options_.plants.min_duration_s = p.get<double>("min_duration_s");
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
-    options_.plants.floor = retarget::parse_floor(p.get<std::string>("floor"));
+    options_.plants.floor = motion::parse_floor(p.get<std::string>("floor"));
     options_.support_acceleration = p.get<double>("support_acceleration");
   }
 

@@ -10,7 +10,6 @@
 #include <stdexcept>
 
 #include "kg/motion/kinematics.hpp"
-#include "kg/retarget/constraint_io.hpp"
 
 namespace kg::retime {
 
@@ -40,9 +39,9 @@ bool is_ancestor(const motion::Skeleton& sk, int ancestor, int joint) {
 // ancestor among the others (the ankle of an ankle + toe-tip pair, or a lone foot with an End Site).
 std::vector<int> automatic_feet(const motion::Motion& m) {
   motion::Motion first{m.skeleton, m.values.topRows(std::min(1, m.frame_count())), m.fps, m.name};
-  const retarget::FootplantDetection d = retarget::detect_footplants(first, {});
+  const motion::FootplantDetection d = motion::detect_footplants(first, {});
   std::vector<int> joints;
-  for (const retarget::PlantPoint& p : d.points) joints.push_back(p.point.joint);
+  for (const motion::PlantPoint& p : d.points) joints.push_back(p.point.joint);
   std::vector<int> feet;
   for (int j : joints) {
     const bool below_another = std::any_of(joints.begin(), joints.end(),
@@ -81,7 +80,7 @@ void activate_pair(std::vector<bool>& on, std::size_t point) {
 // pair of every detection point within the leave height. Only next to plants: a figure gliding
 // over the floor without ever planting is not taken for one standing. Returns the frames it gave
 // contact.
-int touch_where_supported(const motion::Motion& m, const retarget::FootplantDetection& d,
+int touch_where_supported(const motion::Motion& m, const motion::FootplantDetection& d,
                           const FootContactOptions& o, std::vector<std::vector<bool>>& active) {
   if (!(o.support_acceleration >= 0) || !std::isfinite(o.support_acceleration))
     throw std::invalid_argument("contacts: support_acceleration " + fmt(o.support_acceleration) +
@@ -112,7 +111,7 @@ int touch_where_supported(const motion::Motion& m, const retarget::FootplantDete
     std::vector<bool>& on = active[static_cast<std::size_t>(f)];
     bool touched = false;
     for (std::size_t i = 0; i < d.points.size(); ++i) {
-      const retarget::PlantPoint& point = d.points[i];
+      const motion::PlantPoint& point = d.points[i];
       const std::size_t at = static_cast<std::size_t>(f);
       if (point.heights[at] - point.rest_levels[at] > leave) continue;
       activate_pair(on, i);
@@ -292,7 +291,7 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
     const int j = sk.find_joint(name);
     if (j < 0) {
       std::string msg = "contacts: unknown foot joint '" + name + "'";
-      const std::string near = retarget::nearest_joint_name(sk, name);
+      const std::string near = motion::nearest_joint_name(sk, name);
       if (!near.empty()) msg += " (did you mean '" + near + "'?)";
       throw std::invalid_argument(msg);
     }
@@ -302,7 +301,7 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   if (feet.empty()) throw std::invalid_argument("contacts: no foot found; name the foot joints");
 
   std::vector<ContactPatch> patches;
-  retarget::FootplantOptions plants = o.plants;
+  motion::FootplantOptions plants = o.plants;
   plants.points.clear();
   std::vector<std::string> notes;
   for (int foot : feet) {
@@ -320,11 +319,11 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
                     fmt((at(p.vertices[1]) - at(p.vertices[0])).norm()) + " m, width " +
                     fmt((at(p.vertices[1]) - at(p.vertices[2])).norm()) + " m");
   }
-  const retarget::FootplantDetection d = retarget::detect_footplants(m, plants);
+  const motion::FootplantDetection d = motion::detect_footplants(m, plants);
   const int frames = m.frame_count();
   std::vector<std::vector<bool>> active(static_cast<std::size_t>(frames),
                                         std::vector<bool>(4 * feet.size(), false));
-  for (const retarget::Footplant& plant : d.plants)
+  for (const motion::Footplant& plant : d.plants)
     for (int f = plant.first_frame; f <= plant.last_frame; ++f)
       activate_pair(active[static_cast<std::size_t>(f)], static_cast<std::size_t>(plant.point));
   const int supported = touch_where_supported(m, d, o, active);

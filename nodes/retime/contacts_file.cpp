@@ -5,21 +5,20 @@
 
 #include <yaml-cpp/yaml.h>
 
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/error.hpp"
-#include "kg/graph/yaml_reader.hpp"
-#include "kg/retarget/constraint_io.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
+#include "kg/base/yaml_reader.hpp"
 #include "kg/retime/contacts.hpp"
 
 namespace kg::retime {
 
 namespace {
 
-using graph::Error;
-using graph::SourceLocation;
+using kg::Error;
+using kg::SourceLocation;
 
 
-class Reader : public graph::YamlReader {
+class Reader : public kg::YamlReader {
  public:
   Reader(std::string file, const motion::Motion& motion) : YamlReader(std::move(file)), motion_(motion) {}
 
@@ -67,7 +66,7 @@ class Reader : public graph::YamlReader {
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
     std::string msg = what + ": unknown joint '" + name + "'";
-    const std::string near = retarget::nearest_joint_name(sk, name);
+    const std::string near = motion::nearest_joint_name(sk, name);
     if (!near.empty()) msg += " (did you mean '" + near + "'?)";
     fail(msg, n.Mark());
   }
@@ -156,7 +155,7 @@ Contacts read_contacts_string(const std::string& text, const std::string& file_n
 }
 
 Contacts read_contacts_file(const std::string& path, const motion::Motion& motion) {
-  return read_contacts_string(graph::read_input_file(path, "contact file"), path, motion);
+  return read_contacts_string(kg::read_input_file(path, "contact file"), path, motion);
 }
 
 }  // namespace kg::retime

@@ -5,20 +5,20 @@
 #include <string>
 
 #include "kg/motion/rotations.hpp"
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 
 namespace kg::retime {
 
 namespace {
 
-void check_dynamics_body(const BodyModel& body, const char* who);  // below
+void check_dynamics_body(const body::BodyModel& body, const char* who);  // below
 
 
 std::string str(int i) {
   return std::to_string(i);
 }
 
-void check_frame_size(const BodyModel& body, Eigen::Index size, const char* who, const char* what) {
+void check_frame_size(const body::BodyModel& body, Eigen::Index size, const char* who, const char* what) {
   if (size != body.skeleton->channel_count())
     throw std::invalid_argument(std::string(who) + ": " + what + " has " + std::to_string(size) +
                                 " values, the body's skeleton has " + str(body.skeleton->channel_count()) +
@@ -26,12 +26,12 @@ void check_frame_size(const BodyModel& body, Eigen::Index size, const char* who,
 }
 
 // Topology and buffers for body's skeleton (no allocation when they already fit).
-void prepare(const BodyModel& body, DynamicsWorkspace& ws) {
-  DynamicsTopology::build(*body.skeleton, ws.topology);
+void prepare(const body::BodyModel& body, DynamicsWorkspace& ws) {
+  body::DynamicsTopology::build(*body.skeleton, ws.topology);
   ws.kinematics.resize(body.skeleton->joint_count(), body.skeleton->channel_count());
 }
 
-void check_clip(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+void check_clip(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
                 const char* who) {
   check_dynamics_body(body, who);
   if (!clip.skeleton)
@@ -65,20 +65,20 @@ void resize(FrameTorques& t, int channels) {
   t.gravity.resize(channels, 3);
 }
 
-const Vec3<PathGravity> kPathGravity{PathGravity::term<path_terms::gx>(1.0),
+const body::Vec3<PathGravity> kPathGravity{PathGravity::term<path_terms::gx>(1.0),
                                      PathGravity::term<path_terms::gy>(1.0),
                                      PathGravity::term<path_terms::gz>(1.0)};
 
 // The path recursion for one frame: q̇ = q' ṗ, q̈ = q'' ṗ² + q' p̈, symbolic gravity.
 template <class F, class K, class Tau>
-void path_pass(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+void path_pass(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
                int scaled_joint, const K& scale, DynamicsWorkspace& ws,
-               RneaBuffers<PathVelocity, PathAcceleration, F>& buf, Tau&& tau) {
+               body::RneaBuffers<PathVelocity, PathAcceleration, F>& buf, Tau&& tau) {
   prepare(body, ws);
-  compute_frame_kinematics(body, clip.values.row(frame), ws.kinematics);
+  body::compute_frame_kinematics(body, clip.values.row(frame), ws.kinematics);
   const double* q1 = d.first.row(frame).data();
   const double* q2 = d.second.row(frame).data();
-  rnea_pass(
+  body::rnea_pass(
       ws.topology, ws.kinematics, [&](int c) { return PathVelocity::term<path_terms::pdot>(q1[c]); },
       [&](int c) {
         PathChannelAcceleration a = PathChannelAcceleration::term<path_terms::pdot2>(q2[c]);
@@ -90,32 +90,12 @@ void path_pass(const BodyModel& body, const motion::Motion& clip, const PathDeri
 
 }  // namespace
 
-void DynamicsTopology::build(const motion::Skeleton& skeleton, DynamicsTopology& out) {
-  const int joints = skeleton.joint_count();
-  out.joints.resize(static_cast<std::size_t>(joints));
-  out.order.clear();
-  out.order.reserve(static_cast<std::size_t>(skeleton.channel_count()));
-  for (int j = 0; j < joints; ++j) {
-    const motion::Joint& jt = skeleton.joint(j);
-    JointInfo& info = out.joints[static_cast<std::size_t>(j)];
-    info.parent = jt.parent;
-    info.begin = static_cast<int>(out.order.size());
-    const int n = static_cast<int>(jt.channels.size());
-    for (int pass = 0; pass < 2; ++pass)
-      for (int i = 0; i < n; ++i)
-        if (motion::is_rotation(jt.channels[static_cast<std::size_t>(i)].kind) == (pass == 1))
-          out.order.push_back(jt.first_channel + i);
-    info.end = static_cast<int>(out.order.size());
-  }
-  out.channel_count = skeleton.channel_count();
-}
-
 namespace {
 
 // The per-call guard of the recursions: what they need to index safely and give finite numbers.
 // Cheap enough for every frame; the whole model is checked once per clip by check_body_model
 // (body_build.hpp), whose positive-definiteness test would cost more than the recursion.
-void check_dynamics_body(const BodyModel& body, const char* who) {
+void check_dynamics_body(const body::BodyModel& body, const char* who) {
   if (!body.skeleton) throw std::invalid_argument(std::string(who) + ": the body model has no skeleton");
   const motion::Skeleton& s = *body.skeleton;
   if (body.segments.size() != static_cast<std::size_t>(s.joint_count()))
@@ -124,7 +104,7 @@ void check_dynamics_body(const BodyModel& body, const char* who) {
                                 str(s.joint_count()) + " joints (expected one per joint)");
   // Called on every frame: the message is built only on failure.
   for (int j = 0; j < s.joint_count(); ++j) {
-    const SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
+    const body::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
     const char* problem = nullptr;
     const Eigen::Matrix3d& I = seg.inertia;
     if (!std::isfinite(seg.mass) || seg.mass < 0)
@@ -144,87 +124,7 @@ void check_dynamics_body(const BodyModel& body, const char* who) {
 
 }  // namespace
 
-void compute_frame_kinematics(const BodyModel& body, motion::FrameRef q, FrameKinematics& out) {
-  const motion::Skeleton& s = *body.skeleton;
-  const int joints = s.joint_count();
-  if (out.inertia.size() != static_cast<std::size_t>(joints) ||
-      out.axis.size() != static_cast<std::size_t>(s.channel_count()))
-    out.resize(joints, s.channel_count());
-  const double* values = q.data();
-  for (int j = 0; j < joints; ++j) {
-    const motion::Joint& jt = s.joint(j);
-    const auto uj = static_cast<std::size_t>(j);
-    Eigen::Matrix3d Rp;
-    Eigen::Vector3d pp;
-    if (jt.parent < 0) {
-      Rp = s.file_to_world;
-      pp.setZero();
-    } else {
-      const Eigen::Isometry3d& P = out.world[static_cast<std::size_t>(jt.parent)];
-      Rp = P.linear();
-      pp = P.translation();
-    }
-    Eigen::Vector3d t = jt.offset;
-    bool rotated = false;
-    for (std::size_t i = 0; i < jt.channels.size(); ++i) {
-      const motion::ChannelKind kind = jt.channels[i].kind;
-      if (motion::is_rotation(kind))
-        rotated = true;
-      else
-        t[motion::axis_index(kind)] = values[jt.first_channel + static_cast<int>(i)];
-    }
-    const Eigen::Vector3d p = Rp * t + pp;
-    if (j == 0) out.origin = p;
-    const Vec3<double> r = vec3(p - out.origin);
-    Eigen::Matrix3d R = Rp;
-    if (rotated) {
-      const bool plain = motion::is_identity(jt.axis);
-      if (!plain) R = Rp * jt.axis;
-      for (std::size_t i = 0; i < jt.channels.size(); ++i) {
-        const motion::ChannelKind kind = jt.channels[i].kind;
-        if (!motion::is_rotation(kind)) continue;
-        const int a = motion::axis_index(kind);
-        const int c = jt.first_channel + static_cast<int>(i);
-        const Vec3<double> w = vec3(R.col(a));
-        out.axis[static_cast<std::size_t>(c)] = {w, cross(r, w)};
-        const double x = values[c];
-        motion::post_rotate(R, a, std::cos(x), std::sin(x));
-      }
-      if (!plain) R = R * jt.axis.transpose();
-    }
-    for (std::size_t i = 0; i < jt.channels.size(); ++i) {
-      const motion::ChannelKind kind = jt.channels[i].kind;
-      if (!motion::is_rotation(kind))
-        out.axis[static_cast<std::size_t>(jt.first_channel) + i] = {{},
-                                                                    vec3(Rp.col(motion::axis_index(kind)))};
-    }
-    Eigen::Isometry3d& W = out.world[uj];
-    W.linear() = R;
-    W.translation() = p;
-    W.makeAffine();
-
-    const SegmentInertia& seg = body.segments[uj];
-    SpatialInertia& I = out.inertia[uj];
-    if (seg.mass == 0 && seg.inertia.isZero(0)) {
-      I = SpatialInertia{};
-      continue;
-    }
-    const Eigen::Vector3d c = R * seg.com + (p - out.origin);
-    const Eigen::Matrix3d Ic = R * seg.inertia * R.transpose();
-    const double m = seg.mass;
-    const double cc = c.squaredNorm();
-    I.m = m;
-    I.h = vec3(m * c);
-    I.xx = Ic(0, 0) + m * (cc - c.x() * c.x());
-    I.yy = Ic(1, 1) + m * (cc - c.y() * c.y());
-    I.zz = Ic(2, 2) + m * (cc - c.z() * c.z());
-    I.xy = 0.5 * (Ic(0, 1) + Ic(1, 0)) - m * c.x() * c.y();
-    I.xz = 0.5 * (Ic(0, 2) + Ic(2, 0)) - m * c.x() * c.z();
-    I.yz = 0.5 * (Ic(1, 2) + Ic(2, 1)) - m * c.y() * c.z();
-  }
-}
-
-void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
+void inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
                       const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
                       DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau) {
   constexpr const char* who = "inverse_dynamics";
@@ -235,11 +135,11 @@ void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRe
   check_frame_size(body, tau.size(), who, "tau");
   if (!gravity.allFinite()) throw std::invalid_argument("inverse_dynamics: gravity is not finite");
   prepare(body, ws);
-  compute_frame_kinematics(body, q, ws.kinematics);
+  body::compute_frame_kinematics(body, q, ws.kinematics);
   const int joints = body.skeleton->joint_count();
-  std::span<const Spatial<double>> ext;
+  std::span<const body::Spatial<double>> ext;
   if (!external.empty()) {
-    ws.external.assign(static_cast<std::size_t>(joints), Spatial<double>{});
+    ws.external.assign(static_cast<std::size_t>(joints), body::Spatial<double>{});
     for (std::size_t i = 0; i < external.size(); ++i) {
       const ExternalForce& e = external[i];
       if (e.joint < 0 || e.joint >= joints)
@@ -250,21 +150,21 @@ void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRe
         throw std::invalid_argument("inverse_dynamics: external force " + std::to_string(i) +
                                     " is not finite");
       const Eigen::Vector3d r = e.point - ws.kinematics.origin;
-      Spatial<double>& f = ws.external[static_cast<std::size_t>(e.joint)];
-      f.ang += vec3(r.cross(e.force) + e.torque);
-      f.lin += vec3(e.force);
+      body::Spatial<double>& f = ws.external[static_cast<std::size_t>(e.joint)];
+      f.ang += body::vec3(r.cross(e.force) + e.torque);
+      f.lin += body::vec3(e.force);
     }
     ext = ws.external;
   }
   const double* v = qd.data();
   const double* a = qdd.data();
   double* out = tau.data();
-  rnea_pass(
-      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [a](int c) { return a[c]; }, vec3(gravity), -1,
+  body::rnea_pass(
+      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [a](int c) { return a[c]; }, body::vec3(gravity), -1,
       1.0, ext, ws.numeric, [out](int c, double t) { out[c] = t; });
 }
 
-Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+Eigen::VectorXd inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                                  motion::FrameRef qdd, const Eigen::Vector3d& gravity,
                                  std::span<const ExternalForce> external) {
   check_dynamics_body(body, "inverse_dynamics");
@@ -274,7 +174,7 @@ Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, moti
   return tau;
 }
 
-void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
+void mass_matrix(const body::BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
                  Eigen::Ref<Eigen::MatrixXd> M) {
   constexpr const char* who = "mass_matrix";
   check_dynamics_body(body, who);
@@ -284,8 +184,8 @@ void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& w
     throw std::invalid_argument("mass_matrix: M is " + std::to_string(M.rows()) + " x " +
                                 std::to_string(M.cols()) + ", expected " + str(n) + " x " + str(n));
   prepare(body, ws);
-  compute_frame_kinematics(body, q, ws.kinematics);
-  const DynamicsTopology& topo = ws.topology;
+  body::compute_frame_kinematics(body, q, ws.kinematics);
+  const body::DynamicsTopology& topo = ws.topology;
   const int joints = static_cast<int>(topo.joints.size());
   ws.composite.assign(ws.kinematics.inertia.begin(), ws.kinematics.inertia.end());
   for (int j = joints - 1; j >= 0; --j) {
@@ -294,16 +194,16 @@ void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& w
       ws.composite[static_cast<std::size_t>(parent)] += ws.composite[static_cast<std::size_t>(j)];
   }
   M.setZero();
-  const std::vector<Spatial<double>>& S = ws.kinematics.axis;
+  const std::vector<body::Spatial<double>>& S = ws.kinematics.axis;
   for (int j = 0; j < joints; ++j) {
-    const DynamicsTopology::JointInfo& jt = topo.joints[static_cast<std::size_t>(j)];
+    const body::DynamicsTopology::JointInfo& jt = topo.joints[static_cast<std::size_t>(j)];
     for (int k = jt.begin; k < jt.end; ++k) {
       const int c = topo.order[static_cast<std::size_t>(k)];
       // The force the subtree of j needs to accelerate along channel c alone (the bodies between a
       // joint's channels are massless, so every channel of j sees the same composite inertia).
-      const Spatial<double> F = ws.composite[static_cast<std::size_t>(j)] * S[static_cast<std::size_t>(c)];
+      const body::Spatial<double> F = ws.composite[static_cast<std::size_t>(j)] * S[static_cast<std::size_t>(c)];
       for (int a = j; a >= 0; a = topo.joints[static_cast<std::size_t>(a)].parent) {
-        const DynamicsTopology::JointInfo& at = topo.joints[static_cast<std::size_t>(a)];
+        const body::DynamicsTopology::JointInfo& at = topo.joints[static_cast<std::size_t>(a)];
         for (int l = at.begin; l < at.end; ++l) {
           const int e = topo.order[static_cast<std::size_t>(l)];
           const double x = dot(S[static_cast<std::size_t>(e)], F);
@@ -315,7 +215,7 @@ void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& w
   }
 }
 
-void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+void bias_forces(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                  const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias) {
   constexpr const char* who = "bias_forces";
   check_dynamics_body(body, who);
@@ -324,15 +224,15 @@ void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
   check_frame_size(body, bias.size(), who, "bias");
   if (!gravity.allFinite()) throw std::invalid_argument("bias_forces: gravity is not finite");
   prepare(body, ws);
-  compute_frame_kinematics(body, q, ws.kinematics);
+  body::compute_frame_kinematics(body, q, ws.kinematics);
   const double* v = qd.data();
   double* out = bias.data();
-  rnea_pass(
-      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [](int) { return 0.0; }, vec3(gravity), -1,
+  body::rnea_pass(
+      ws.topology, ws.kinematics, [v](int c) { return v[c]; }, [](int) { return 0.0; }, body::vec3(gravity), -1,
       1.0, {}, ws.numeric, [out](int c, double t) { out[c] = t; });
 }
 
-void frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
                    DynamicsWorkspace& ws, FrameTorques& out) {
   check_clip(body, clip, d, frame, "frame_torques");
   resize(out, body.skeleton->channel_count());
@@ -346,14 +246,14 @@ void frame_torques(const BodyModel& body, const motion::Motion& clip, const Path
   });
 }
 
-FrameTorques frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+FrameTorques frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                            int frame, DynamicsWorkspace& ws) {
   FrameTorques out;
   frame_torques(body, clip, d, frame, ws, out);
   return out;
 }
 
-void frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                               int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out) {
   check_clip(body, clip, d, frame, "frame_torques_mass_scale");
   if (joint < 0 || joint >= body.skeleton->joint_count())
@@ -381,7 +281,7 @@ void frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip,
             });
 }
 
-MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip,
+MassScaleTorques frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip,
                                           const PathDerivatives& d, int frame, int joint,
                                           DynamicsWorkspace& ws) {
   MassScaleTorques out;
@@ -389,9 +289,9 @@ MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::M
   return out;
 }
 
-PathTorques path_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+PathTorques path_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                          int segment) {
-  check_body_model(body, "path_torques");
+  body::check_body_model(body, "path_torques");
   check_dynamics_body(body, "path_torques");
   if (segment < -1 || segment >= body.skeleton->joint_count())
     throw std::invalid_argument("path_torques: segment " + str(segment) +

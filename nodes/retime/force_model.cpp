@@ -1,7 +1,7 @@
 // The fan force model (force_model.hpp): sectors about each hull's centre, λ and τ affine in each.
 #include "kg/retime/force_model.hpp"
 
-#include "convex_nearest.hpp"
+#include "kg/numerics/convex_nearest.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -209,7 +209,7 @@ std::vector<PatchForce> patch_forces(const FrameHull& h, const Eigen::VectorXd& 
 
 HullPoint closest_point_on_polygon(std::span<const Eigen::Vector2d> v, const Eigen::Vector2d& x) {
   if (v.empty()) throw std::invalid_argument("closest point: the polygon has no vertex");
-  return detail::nearest_on_polygon(v.data(), v.size(), x);
+  return numerics::nearest_on_polygon(v.data(), v.size(), x);
 }
 
 HullPoint closest_point(const FrameHull& h, const Eigen::Vector2d& x, int& hint) {
@@ -222,7 +222,7 @@ HullPoint closest_point(const FrameHull& h, const Eigen::Vector2d& x, int& hint)
     return {x, 0.0, true};
   // x is beyond edge s.edge, or in a wedge outside at the centre (which touches that edge): the
   // walk from there is short.
-  return detail::nearest_from_edge(h.vertices.data(), n, x, s.edge);
+  return numerics::nearest_from_edge(h.vertices.data(), n, x, s.edge);
 }
 
 }  // namespace kg::retime

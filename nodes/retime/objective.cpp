@@ -10,7 +10,7 @@
 
 #include "kg/retime/force_model.hpp"
 
-#include "convex_nearest.hpp"
+#include "kg/numerics/convex_nearest.hpp"
 
 namespace kg::retime {
 
@@ -19,8 +19,8 @@ namespace {
 // The hull's point nearest to x, walking from `edge` (out of line: evaluate's path for points
 // inside their fan triangle stays short).
 [[gnu::noinline]] HullPoint nearest(const Eigen::Vector2d* v, int n, const Eigen::Vector2d& x, int edge) {
-  return n >= 3 ? detail::nearest_from_edge(v, n, x, edge)
-                : detail::nearest_on_polygon(v, static_cast<std::size_t>(n), x);
+  return n >= 3 ? numerics::nearest_from_edge(v, n, x, edge)
+                : numerics::nearest_on_polygon(v, static_cast<std::size_t>(n), x);
 }
 
 }  // namespace

@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "kg/graph/json.hpp"
+#include "kg/base/json.hpp"
 #include "kg/motion/resample.hpp"
 
 namespace kg::retime {
@@ -66,7 +66,7 @@ void write_warp_json(std::ostream& os, const TimeWarp& warp, double fps) {
     const WarpSample s = warp.sample(k / fps);
     t.push_back(k / fps), p.push_back(s.p), pdot.push_back(s.pdot), pddot.push_back(s.pddot);
   }
-  graph::JsonWriter w(os, 0);
+  kg::JsonWriter w(os, 0);
   w.begin_object();
   w.field("duration", warp.duration);
   w.field("source_duration", warp.source_duration);

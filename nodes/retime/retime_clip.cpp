@@ -5,7 +5,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/graph/json.hpp"
+#include "kg/base/json.hpp"
 #include "kg/retime/force_model.hpp"
 #include "kg/retime/playback.hpp"
 
@@ -237,7 +237,7 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
 
 void write_forces_json(std::ostream& os, const Hulls& hulls, std::span<const FrameTorques> torques,
                        const TimeWarp& warp, double fps) {
-  graph::JsonWriter w(os, 0);
+  kg::JsonWriter w(os, 0);
   w.begin_object();
   w.field("fps", fps);
   w.key("patches");

@@ -11,8 +11,9 @@
 #include <stdexcept>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/json.hpp"
+#include "kg/retime/nodes.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/json.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
@@ -52,7 +53,7 @@ class DynamicsNode final : public graph::Node {
 
   void run(RunContext& ctx) const override {
     const motion::Motion& clip = ctx.input<motion::Motion>("motion");
-    const BodyModel& body = ctx.input<BodyModel>("body");
+    const body::BodyModel& body = ctx.input<body::BodyModel>("body");
     if (body.skeleton != clip.skeleton &&
         (!body.skeleton || body.skeleton->channel_count() != clip.skeleton->channel_count()))
       throw std::invalid_argument("the body model was built for another skeleton than the motion's");
@@ -111,7 +112,7 @@ class TorqueLimitsNode final : public graph::Node {
   }
 
   void run(RunContext& ctx) const override {
-    const BodyModel& body = ctx.input<BodyModel>("body");
+    const body::BodyModel& body = ctx.input<body::BodyModel>("body");
     if (options_.margin == 0) {  // the body's own limits (from its file, or none)
       ctx.log("margin 0: the body's own torque limits are kept");
       ctx.output("body", body);
@@ -271,10 +272,10 @@ class HullsNode final : public graph::Node {
   }
 
   void run(RunContext& ctx) const override {
-    const auto body_in = ctx.input_value("body").get_shared<BodyModel>();
+    const auto body_in = ctx.input_value("body").get_shared<body::BodyModel>();
     const auto contacts_in = ctx.input_value("contacts").get_shared<Contacts>();
     const auto source_in = ctx.input_value("torques").get_shared<PathTorques>();
-    BodyModel body = *body_in;
+    body::BodyModel body = *body_in;
     const Contacts& contacts = *contacts_in;
     const PathTorques& source = *source_in;
     if (contacts.frame_count() != source.frame_count())
@@ -453,8 +454,8 @@ class RetimeNode final : public graph::Node {
     const double fps = fps_ > 0 ? fps_ : motion.fps;
     const int frames = failed ? 0 : output_frame_count(r.warp, fps);  // refuses a count too large first
     if (!report_.empty())
-      graph::write_file_atomically(report_, [&](std::ostream& os) {
-        graph::JsonWriter w(os);
+      kg::write_file_atomically(report_, [&](std::ostream& os) {
+        kg::JsonWriter w(os);
         w.begin_object();
         w.field("clip", motion.name);
         w.field("objective", to_string(options.target));
@@ -485,12 +486,12 @@ class RetimeNode final : public graph::Node {
 
     if (!curves_.empty()) {
       const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
-      graph::write_file_atomically(curves_, [&](std::ostream& os) {
+      kg::write_file_atomically(curves_, [&](std::ostream& os) {
         json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
       });
     }
     if (!forces_.empty())
-      graph::write_file_atomically(
+      kg::write_file_atomically(
           forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
     ctx.output("warp", r.warp);
     ctx.output("motion", retimed_motion(motion, r.warp, fps));

@@ -8,7 +8,7 @@
 #include <Eigen/LU>
 #include <Eigen/QR>
 
-#include "kg/retarget/bspline.hpp"
+#include "kg/motion/bspline.hpp"
 
 namespace kg::retime {
 
@@ -34,7 +34,7 @@ WarpSample basis(double duration, int segments, double t) {
   const double h = duration / segments;
   const double u = std::clamp(t, 0.0, duration) / h;
   const int segment = std::clamp(static_cast<int>(std::floor(u)), 0, segments - 1);
-  const retarget::CubicWeights w = retarget::cubic_bspline_weights(u - segment);
+  const motion::CubicWeights w = motion::cubic_bspline_weights(u - segment);
   WarpSample s;
   s.first = segment;
   for (int i = 0; i < 4; ++i) {

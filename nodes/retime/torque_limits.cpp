@@ -8,7 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 
 namespace kg::retime {
 
@@ -39,7 +39,7 @@ std::vector<bool> root_channels(const motion::Skeleton& s) {
 
 // Channels whose limits are estimated: actuated (not a root's, not bounded to [0, 0]) and, unless
 // asked, not a position channel.
-std::vector<bool> estimated_channels(const BodyModel& body, bool position_channels) {
+std::vector<bool> estimated_channels(const body::BodyModel& body, bool position_channels) {
   const motion::Skeleton& s = *body.skeleton;
   std::vector<bool> out = root_channels(s);
   out.flip();
@@ -110,7 +110,7 @@ void check_options(const TorqueLimitOptions& o) {
     throw std::invalid_argument("torque limits: floor must be finite and >= 0 (N m), got " + fmt(o.floor));
 }
 
-void check_clip(const BodyModel& body, const ClipLoads& clip, std::size_t index) {
+void check_clip(const body::BodyModel& body, const ClipLoads& clip, std::size_t index) {
   const std::string who = "torque limits: " + clip_name(clip, index);
   const int channels = body.skeleton->channel_count();
   if (clip.contacts == nullptr) throw std::invalid_argument(who + " has no contacts");
@@ -178,9 +178,9 @@ std::vector<std::pair<int, int>> mirrored_joints(const motion::Skeleton& s) {
   return pairs;
 }
 
-BodyModel without_torque_limits(const BodyModel& body, bool position_channels) {
-  check_body_model(body, "torque limits");
-  BodyModel out = body;
+body::BodyModel without_torque_limits(const body::BodyModel& body, bool position_channels) {
+  body::check_body_model(body, "torque limits");
+  body::BodyModel out = body;
   const std::vector<bool> estimated = estimated_channels(body, position_channels);
   for (std::size_t c = 0; c < estimated.size(); ++c)
     if (estimated[c]) {
@@ -190,16 +190,16 @@ BodyModel without_torque_limits(const BodyModel& body, bool position_channels) {
   return out;
 }
 
-TorqueLimitEstimate estimate_torque_limits(const BodyModel& body, std::span<const ClipLoads> clips,
+TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::span<const ClipLoads> clips,
                                            const TorqueLimitOptions& options) {
   check_options(options);
-  check_body_model(body, "torque limits");
+  body::check_body_model(body, "torque limits");
   if (clips.empty()) throw std::invalid_argument("torque limits: no clip to observe");
   for (std::size_t i = 0; i < clips.size(); ++i) check_clip(body, clips[i], i);
 
   const motion::Skeleton& s = *body.skeleton;
   const int channels = s.channel_count();
-  const BodyModel unlimited = without_torque_limits(body, options.position_channels);
+  const body::BodyModel unlimited = without_torque_limits(body, options.position_channels);
   TorqueLimitEstimate out;
   out.estimated = estimated_channels(body, options.position_channels);
   out.peak = Eigen::VectorXd::Zero(channels);
@@ -302,7 +302,7 @@ TorqueLimitEstimate estimate_torque_limits(const BodyModel& body, std::span<cons
   return out;
 }
 
-TorqueLimitEstimate estimate_torque_limits(const BodyModel& body, const Contacts& contacts,
+TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, const Contacts& contacts,
                                            std::span<const FrameTorques> torques,
                                            const TorqueLimitOptions& options) {
   const ClipLoads clip{&contacts, torques, ""};

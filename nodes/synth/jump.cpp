@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/synth/synthesize.hpp"
 #include "synth_detail.hpp"
 
@@ -376,16 +376,16 @@ Synthesis synthesize_jump(const JumpOptions& options) {
   // last, without a kink: the feet leave and meet the floor at rest, and a shift changing at once
   // would push them through it. The mass model is retime.body_model's default (de Leva's male
   // table), as the retiming sees it.
-  const retime::BodyModel body = [&] {
-    const Eigen::RowVectorXd rest = retime::rest_pose_values(*fig.skeleton);
-    return retime::build_body_model(fig.skeleton, {}, &rest).body;
+  const body::BodyModel body = [&] {
+    const Eigen::RowVectorXd rest = body::rest_pose_values(*fig.skeleton);
+    return body::build_body_model(fig.skeleton, {}, &rest).body;
   }();
   // Its own writer: the frames' writer carries each joint's Euler branch from frame to frame.
   PoseWriter com_writer(fig);
   Eigen::RowVectorXd values(fig.skeleton->channel_count());
   auto com_of = [&](const BodyPose& p) {
     com_writer.write(p, values.data());
-    return retime::body_com(body, values);
+    return body::body_com(body, values);
   };
   const double flight_time = t_land - t_off;
   const Eigen::Vector3d com_off = com_of(plan.pose(t_off)), com_land = com_of(plan.pose(t_land));

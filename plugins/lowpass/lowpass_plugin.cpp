@@ -12,7 +12,7 @@
 
 #include "filter.hpp"
 #include "kg/graph/plugin_abi.hpp"
-#include "kg/motion/motion.hpp"
+#include "kg/motion/nodes.hpp"
 
 namespace kg::lowpass {
 namespace {

@@ -5,13 +5,14 @@
 #include <sstream>
 
 #include "../support/temp_dir.hpp"
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/error.hpp"
-#include "kg/graph/json.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
+#include "kg/base/json.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/graph/value.hpp"
 #include "test_nodes.hpp"
 
+using namespace kg;
 using namespace kg::graph;
 using kg::test::read_file;
 using kg::test::TempDir;

@@ -15,13 +15,14 @@
 #include <vector>
 
 #include "../support/temp_dir.hpp"
-#include "kg/graph/atomic_file.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/file_patterns.hpp"
 #include "kg/graph/manifest.hpp"
 #include "kg/graph/sha256.hpp"
 #include "kg/graph/yaml_io.hpp"
 
+using namespace kg;
 using namespace kg::graph;
 using kg::test::read_file;
 using kg::test::TempDir;
@@ -186,7 +187,7 @@ std::string graph_error_of(const fs::path& file) {
   } catch (const Error& e) {
     return e.what();
   } catch (const std::exception& e) {
-    return std::string("NOT a kg::graph::Error: ") + e.what();
+    return std::string("NOT a kg::Error: ") + e.what();
   }
   return "NO ERROR";
 }

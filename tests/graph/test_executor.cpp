@@ -8,6 +8,7 @@
 #include "kg/graph/yaml_io.hpp"
 #include "test_nodes.hpp"
 
+using namespace kg;
 using namespace kg::graph;
 
 namespace {

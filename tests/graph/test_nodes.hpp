@@ -16,6 +16,7 @@
 
 namespace kg_test {
 
+using namespace kg;
 using namespace kg::graph;
 
 // Two parties meet, or give up after a timeout: proves two nodes really run at the same time

@@ -5,6 +5,7 @@
 #include "kg/graph/yaml_io.hpp"
 #include "test_nodes.hpp"
 
+using namespace kg;
 using namespace kg::graph;
 
 namespace {
@@ -22,7 +23,7 @@ std::string load_error(const std::string& text, const std::map<std::string, std:
   } catch (const Error& e) {
     return e.what();
   } catch (const std::exception& e) {
-    return std::string("NOT a kg::graph::Error: ") + e.what();
+    return std::string("NOT a kg::Error: ") + e.what();
   }
   return "NO ERROR";
 }

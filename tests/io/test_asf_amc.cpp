@@ -11,16 +11,17 @@
 #include <string>
 #include <vector>
 
+#include "kg/io/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace fs = std::filesystem;
-using kg::graph::Error;
+using kg::Error;
 using kg::io::AsfSkeleton;
 using kg::motion::ChannelKind;
 using kg::motion::Motion;
@@ -116,7 +117,7 @@ std::pair<int, std::string> error_of(F&& f) {
   } catch (const Error& e) {
     return {e.where().line, e.what()};
   }
-  FAIL("no kg::graph::Error thrown");
+  FAIL("no kg::Error thrown");
   return {};
 }
 

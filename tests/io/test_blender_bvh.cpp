@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "../support/temp_dir.hpp"
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
@@ -128,7 +128,7 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
       "blender -b --factory-startup --python-exit-code 1 --python '" + script.string() + "' --";
   for (const auto& [name, m] : clips) {
     const fs::path bvh = dir / (name + ".bvh");
-    kg::graph::write_file_atomically(bvh,
+    kg::write_file_atomically(bvh,
                                      [&](std::ostream& os) { kg::io::write_bvh(os, m, {.units = "m"}); });
     command += " '" + bvh.string() + "' '" + (dir / (name + ".tsv")).string() + "'";
   }

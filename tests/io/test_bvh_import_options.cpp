@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "kg/io/nodes.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 #include "kg/motion/kinematics.hpp"

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "kg/io/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"

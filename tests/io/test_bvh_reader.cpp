@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "../support/temp_dir.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
@@ -72,7 +72,7 @@ std::string with_line(int line, const std::string& text, bool remove = false) {
 std::string error_of(const std::string& text, const std::string& name = "t.bvh") {
   try {
     parse_bvh(text, name);
-  } catch (const kg::graph::Error& e) {
+  } catch (const kg::Error& e) {
     return e.what();
   }
   return "(no error)";
@@ -263,7 +263,7 @@ TEST_CASE("bvh: an unreadable file names the path") {
   try {
     read_bvh("/nonexistent/dir/walk.bvh");
     FAIL("no error");
-  } catch (const kg::graph::Error& e) {
+  } catch (const kg::Error& e) {
     CHECK(std::string(e.what()).rfind("/nonexistent/dir/walk.bvh: no such BVH file", 0) == 0);
   }
 }
@@ -335,7 +335,7 @@ TEST_CASE("bvh: truncated and corrupted real files fail with file:line, never cr
       try {
         parse_bvh(std::string_view(text).substr(0, n), "cut.bvh");
         CHECK(n > last_value);
-      } catch (const kg::graph::Error& e) {
+      } catch (const kg::Error& e) {
         const std::string m = e.what();
         CHECK(m.rfind("cut.bvh:", 0) == 0);
         CHECK(m.find(": expected ") != std::string::npos);
@@ -349,7 +349,7 @@ TEST_CASE("bvh: truncated and corrupted real files fail with file:line, never cr
       try {
         BvhClip c = parse_bvh(bad, "bad.bvh");
         CHECK_NOTHROW(c.motion.check());
-      } catch (const kg::graph::Error& e) {
+      } catch (const kg::Error& e) {
         CHECK(std::string(e.what()).rfind("bad.bvh:", 0) == 0);
       }
     }

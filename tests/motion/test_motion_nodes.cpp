@@ -2,6 +2,7 @@
 
 #include <map>
 
+#include "kg/motion/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/registry.hpp"

@@ -15,6 +15,7 @@
 namespace kg_test {
 
 namespace fs = std::filesystem;
+using namespace kg;
 using namespace kg::graph;
 using kg::test::NodeContext;
 using kg::test::params_for;

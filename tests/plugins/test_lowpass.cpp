@@ -7,6 +7,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "kg/motion/nodes.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/plugin_loader.hpp"
 #include "kg/graph/yaml_io.hpp"

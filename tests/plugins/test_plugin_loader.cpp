@@ -6,7 +6,8 @@
 
 #include <catch2/catch.hpp>
 
-#include "kg/graph/error.hpp"
+#include "kg/motion/nodes.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/plugin_abi.hpp"
 #include "kg/graph/plugin_loader.hpp"
 #include "plugin_test_util.hpp"

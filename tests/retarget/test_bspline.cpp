@@ -5,15 +5,17 @@
 #include <cmath>
 #include <random>
 
-#include "kg/retarget/bspline.hpp"
+#include "kg/motion/bspline.hpp"
+#include "kg/retarget/displacement.hpp"
 
+using namespace kg;
 using namespace kg::retarget;
 
 namespace {
 
 // The spline value at a fractional frame for controls c.
 double spline_at(const Eigen::VectorXd& c, double frame, int frames, int spacing) {
-  const BasisAt b = bspline_basis_at(frame, frames, spacing);
+  const motion::BasisAt b = motion::bspline_basis_at(frame, frames, spacing);
   double v = 0;
   for (int p = 0; p < 4; ++p) v += b.weight[static_cast<std::size_t>(p)] * c[b.first + p];
   return v;
@@ -32,32 +34,32 @@ double kept_energy(const Eigen::VectorXd& signal, int spacing) {
 }  // namespace
 
 TEST_CASE("bspline: knot layout and control counts", "[bspline]") {
-  CHECK(bspline_segment_count(112, 4) == 28);  // ceil(111 / 4)
-  CHECK(bspline_control_count(112, 4) == 31);
-  CHECK(bspline_control_count(9, 4) == 5);     // frames 0..8: segments [0,4], [4,8]
-  CHECK(bspline_control_count(1, 4) == 4);     // one frame still has a whole segment
-  CHECK(bspline_control_count(10, 1) == 12);
+  CHECK(motion::bspline_segment_count(112, 4) == 28);  // ceil(111 / 4)
+  CHECK(motion::bspline_control_count(112, 4) == 31);
+  CHECK(motion::bspline_control_count(9, 4) == 5);     // frames 0..8: segments [0,4], [4,8]
+  CHECK(motion::bspline_control_count(1, 4) == 4);     // one frame still has a whole segment
+  CHECK(motion::bspline_control_count(10, 1) == 12);
   // The last frame sits at the end of the last segment, not at the start of a new one.
-  const BasisAt last = bspline_basis(8, 9, 4);
+  const motion::BasisAt last = motion::bspline_basis(8, 9, 4);
   CHECK(last.first == 1);
   CHECK(last.weight[3] == Approx(1.0 / 6));
   // At a knot, the controls either side weigh 1/6, the one on it 4/6.
-  const BasisAt knot = bspline_basis(4, 9, 4);
+  const motion::BasisAt knot = motion::bspline_basis(4, 9, 4);
   CHECK(knot.first == 1);
   CHECK(knot.weight[0] == Approx(1.0 / 6));
   CHECK(knot.weight[1] == Approx(4.0 / 6));
   CHECK(knot.weight[2] == Approx(1.0 / 6));
   CHECK(knot.weight[3] == Approx(0.0).margin(1e-15));
-  CHECK_THROWS_AS(bspline_basis(9, 9, 4), std::out_of_range);
-  CHECK_THROWS_AS(bspline_control_count(0, 4), std::invalid_argument);
-  CHECK_THROWS_AS(bspline_control_count(10, 0), std::invalid_argument);
+  CHECK_THROWS_AS(motion::bspline_basis(9, 9, 4), std::out_of_range);
+  CHECK_THROWS_AS(motion::bspline_control_count(0, 4), std::invalid_argument);
+  CHECK_THROWS_AS(motion::bspline_control_count(10, 0), std::invalid_argument);
   CHECK_THROWS_AS(DisplacementLayout(10, {4, 0}), std::invalid_argument);
 }
 
 TEST_CASE("bspline: partition of unity and non-negative weights", "[bspline]") {
   for (int spacing : {1, 2, 3, 4, 8}) {
     for (double f = 0; f <= 37; f += 0.25) {
-      const BasisAt b = bspline_basis_at(f, 38, spacing);
+      const motion::BasisAt b = motion::bspline_basis_at(f, 38, spacing);
       double sum = 0;
       for (double w : b.weight) {
         CHECK(w >= 0);
@@ -65,7 +67,7 @@ TEST_CASE("bspline: partition of unity and non-negative weights", "[bspline]") {
       }
       CHECK(sum == Approx(1.0).epsilon(1e-14));
       CHECK(b.first >= 0);
-      CHECK(b.first + 3 < bspline_control_count(38, spacing));
+      CHECK(b.first + 3 < motion::bspline_control_count(38, spacing));
     }
   }
 }
@@ -74,7 +76,7 @@ TEST_CASE("bspline: C2 continuity across knots", "[bspline]") {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> u(-1, 1);
   const int frames = 41, spacing = 4;
-  Eigen::VectorXd c(bspline_control_count(frames, spacing));
+  Eigen::VectorXd c(motion::bspline_control_count(frames, spacing));
   for (int i = 0; i < c.size(); ++i) c[i] = u(rng);
   const double h = 1e-3;
   for (int knot = spacing; knot < frames - 1; knot += spacing) {

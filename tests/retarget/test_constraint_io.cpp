@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <numbers>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
@@ -217,7 +218,7 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
     try {
       read(c.text);
       FAIL("no error");
-    } catch (const graph::Error& e) {
+    } catch (const kg::Error& e) {
       CHECK_THAT(std::string(e.what()), Catch::Contains(c.message));
       CHECK(e.where().file == "c.yaml");
     }

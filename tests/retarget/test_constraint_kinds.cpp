@@ -7,6 +7,7 @@
 #include <numbers>
 #include <random>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/retarget/constraint_kinds.hpp"

@@ -1,4 +1,4 @@
-// Footplant detection against the synthesizer's exact plants and on real clips; footplant
+// motion::Footplant detection against the synthesizer's exact plants and on real clips; footplant
 // constraints in both flavours; the retarget.footplants node.
 #include <catch2/catch.hpp>
 
@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <sstream>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -21,18 +22,18 @@ using namespace kg::retarget;
 namespace {
 
 // Detected plants of the point on (joint, local), in time order.
-std::vector<Footplant> plants_of(const FootplantDetection& d, int joint, const Eigen::Vector3d& local) {
-  std::vector<Footplant> out;
-  for (const Footplant& p : d.plants) {
+std::vector<motion::Footplant> plants_of(const motion::FootplantDetection& d, int joint, const Eigen::Vector3d& local) {
+  std::vector<motion::Footplant> out;
+  for (const motion::Footplant& p : d.plants) {
     const PointRef& r = d.points[static_cast<std::size_t>(p.point)].point;
     if (r.joint == joint && (r.local - local).norm() < 1e-9) out.push_back(p);
   }
   return out;
 }
 
-std::string describe(const FootplantDetection& d) {
+std::string describe(const motion::FootplantDetection& d) {
   std::ostringstream out;
-  for (const Footplant& p : d.plants)
+  for (const motion::Footplant& p : d.plants)
     out << d.points[static_cast<std::size_t>(p.point)].name << " [" << p.first_frame << ", " << p.last_frame
         << "] skate " << p.skate * 1000 << " mm\n";
   return out.str();
@@ -40,7 +41,7 @@ std::string describe(const FootplantDetection& d) {
 
 // Compares detected plants of the ankle and toe-tip points with the synthesizer's, within
 // `tolerance` frames at each end.
-void compare_with_synthesizer(const synth::Synthesis& s, const FootplantDetection& d, int tolerance) {
+void compare_with_synthesizer(const synth::Synthesis& s, const motion::FootplantDetection& d, int tolerance) {
   int compared = 0;
   for (const synth::FootPlant& truth_first : s.plants) {
     if (truth_first.point != synth::FootPoint::Ankle && truth_first.point != synth::FootPoint::Toe) continue;
@@ -52,7 +53,7 @@ void compare_with_synthesizer(const synth::Synthesis& s, const FootplantDetectio
     std::vector<const synth::FootPlant*> truth;
     for (const synth::FootPlant& p : s.plants)
       if (p.side == truth_first.side && p.point == truth_first.point) truth.push_back(&p);
-    const std::vector<Footplant> found = plants_of(d, truth_first.joint, truth_first.local);
+    const std::vector<motion::Footplant> found = plants_of(d, truth_first.joint, truth_first.local);
     INFO(truth_first.name() << ": synthesizer " << truth.size() << " plants, detected " << found.size() << "\n"
                             << describe(d));
     REQUIRE(found.size() == truth.size());
@@ -76,7 +77,7 @@ TEST_CASE("footplants of the synthesized walk match the synthesizer's plants") {
   for (double fps : {120.0, 30.0}) {
     INFO("fps " << fps);
     const synth::Synthesis walk = synth::synthesize_walk({.steps = 6, .speed = 1.3, .stature = 1.75, .fps = fps});
-    const FootplantDetection d = detect_footplants(walk.motion, {});
+    const motion::FootplantDetection d = motion::detect_footplants(walk.motion, {});
     REQUIRE(d.points.size() == 4);
     CHECK(d.points[0].name == "LeftFoot");
     CHECK(d.points[1].name == "LeftToeBase/end");
@@ -85,15 +86,15 @@ TEST_CASE("footplants of the synthesized walk match the synthesizer's plants") {
     // Within 0.1 s (3 frames at 30 Hz): a point leaving a plant accelerates from rest, so any
     // threshold sees it go a little late.
     compare_with_synthesizer(walk, d, static_cast<int>(std::lround(0.1 * fps)));
-    for (const Footplant& p : d.plants) CHECK(p.skate < 0.01);
+    for (const motion::Footplant& p : d.plants) CHECK(p.skate < 0.01);
   }
 }
 
 TEST_CASE("footplant options: named points, given floor, thresholds, minimum duration, errors") {
   const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
-  FootplantOptions o;
+  motion::FootplantOptions o;
   o.points = {"LeftToeBase/end", "RightFoot"};
-  FootplantDetection d = detect_footplants(walk.motion, o);
+  motion::FootplantDetection d = motion::detect_footplants(walk.motion, o);
   REQUIRE(d.points.size() == 2);
   CHECK(d.points[0].point.joint == walk.figure.toe[synth::kLeft]);
   CHECK((d.points[0].point.local - walk.figure.toe_tip_local).norm() < 1e-12);
@@ -104,9 +105,9 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
   std::ostringstream heel;
   heel << "LeftFoot[" << walk.figure.heel_local.x() << " " << walk.figure.heel_local.y() << " "
        << walk.figure.heel_local.z() << "]";
-  FootplantOptions h;
+  motion::FootplantOptions h;
   h.points = {heel.str()};
-  const FootplantDetection hd = detect_footplants(walk.motion, h);
+  const motion::FootplantDetection hd = motion::detect_footplants(walk.motion, h);
   REQUIRE(hd.points.size() == 1);
   CHECK((hd.points[0].point.local - walk.figure.heel_local).norm() < 1e-5);
   int heel_truth = 0;
@@ -117,7 +118,7 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
 
   // A floor given below every point: each point's rest level stays its own, so the same plants.
   o.floor = -1.0;
-  d = detect_footplants(walk.motion, o);
+  d = motion::detect_footplants(walk.motion, o);
   CHECK(d.floor == -1.0);
   CHECK(d.count(0) == toe_plants);
 
@@ -126,44 +127,44 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
   o.speed_threshold = 100;
   o.height_threshold = 10;
   o.trim_distance = 0;
-  d = detect_footplants(walk.motion, o);
+  d = motion::detect_footplants(walk.motion, o);
   REQUIRE(d.plants.size() == d.points.size());
   CHECK(d.plants[0].first_frame == 0);
   CHECK(d.plants[0].last_frame == walk.motion.frame_count() - 1);
   // Trimming keeps each plant's core within trim_distance of its median position.
   o.trim_distance = 0.05;
-  d = detect_footplants(walk.motion, o);
-  for (const Footplant& p : d.plants) CHECK(p.last_frame - p.first_frame + 1 < walk.motion.frame_count());
+  d = motion::detect_footplants(walk.motion, o);
+  for (const motion::Footplant& p : d.plants) CHECK(p.last_frame - p.first_frame + 1 < walk.motion.frame_count());
   o = {};
   o.min_duration_s = walk.motion.duration() + 1;
-  CHECK(detect_footplants(walk.motion, o).plants.empty());
+  CHECK(motion::detect_footplants(walk.motion, o).plants.empty());
 
   o = {};
   o.points = {"LeftToe"};
-  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("unknown joint 'LeftToe'") &&
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("unknown joint 'LeftToe'") &&
                                                           Catch::Contains("nearest: 'LeftToeBase'"));
   o.points = {"LeftFoot[0 0.1]"};
-  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("expected Joint[x y z]"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("expected Joint[x y z]"));
   o.points = {"LeftFoot/end"};
-  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("has no End Site"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("has no End Site"));
   o = {};
   o.hysteresis = 0.5;
-  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("hysteresis"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("hysteresis"));
   o = {};
   o.height_threshold = 0;
-  CHECK_THROWS_WITH(detect_footplants(walk.motion, o), Catch::Contains("thresholds must be positive"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("thresholds must be positive"));
 
   // A skeleton without recognisable feet.
   auto sk = std::make_shared<motion::Skeleton>();
   sk->add_joint({.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Yposition}}, .end_sites = {}});
   motion::Motion blob{sk, motion::FrameMatrix::Zero(10, 1), 30.0, "blob"};
-  CHECK_THROWS_WITH(detect_footplants(blob, {}), Catch::Contains("no foot joint found"));
+  CHECK_THROWS_WITH(motion::detect_footplants(blob, {}), Catch::Contains("no foot joint found"));
 }
 
 TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
   const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
   const motion::Motion& m = walk.motion;
-  const FootplantDetection d = detect_footplants(m, {});
+  const motion::FootplantDetection d = motion::detect_footplants(m, {});
   REQUIRE(!d.plants.empty());
   const ConstraintKindTable kinds = ConstraintKindTable::builtin();
 
@@ -217,7 +218,7 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
   // And sink the first three frames by a further 4 cm: a captured floor that slopes away under
   // the estimate.
   m.values.block(0, root_y, 3, 1).array() -= 0.04;
-  const FootplantDetection d = detect_footplants(m, {});
+  const motion::FootplantDetection d = motion::detect_footplants(m, {});
   REQUIRE(d.floor_estimated);
   REQUIRE(!d.plants.empty());
   const int frames = m.frame_count();
@@ -230,7 +231,7 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
     const ConstraintSet fixed = footplant_constraints(d, frames, {.flavour = PlantFlavour::Fixed, .height_scale = scale});
     CHECK_NOTHROW(check_constraints(fixed, kinds));
     for (const Constraint& c : fixed.constraints) {
-      const Footplant& p = d.plants[static_cast<std::size_t>(&c - fixed.constraints.data())];
+      const motion::Footplant& p = d.plants[static_cast<std::size_t>(&c - fixed.constraints.data())];
       REQUIRE(c.kind == "position");
       for (const Sample& s : c.samples) {
         const std::vector<double>& params = s.params.empty() ? c.params : s.params;
@@ -266,9 +267,9 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
         }
     CHECK(lowered >= 2);  // at least the two ankles in the sunk frames
 
-    FootplantOptions given;
+    motion::FootplantOptions given;
     given.floor = d.floor;
-    const FootplantDetection dg = detect_footplants(m, given);
+    const motion::FootplantDetection dg = motion::detect_footplants(m, given);
     CHECK(!dg.floor_estimated);
     const ConstraintSet level = footplant_constraints(dg, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
     for (const Constraint& c : level.constraints)
@@ -326,7 +327,7 @@ TEST_CASE("footplants on real walks: plausible plant counts per foot") {
     }
     const motion::Motion m = io::import_motion(clip.path, clip.skeleton, io::ImportOptions{}).motion;
     ++read;
-    const FootplantDetection d = detect_footplants(m, {});
+    const motion::FootplantDetection d = motion::detect_footplants(m, {});
     INFO(clip.path << ": " << m.frame_count() << " frames at " << m.fps << " Hz\n" << describe(d));
     for (const std::string& n : d.notes) INFO(n);
     REQUIRE(d.points.size() >= 2);
@@ -338,7 +339,7 @@ TEST_CASE("footplants on real walks: plausible plant counts per foot") {
       CHECK(n <= std::max(2.0, 1.6 * m.duration()));
       CHECK(n >= std::floor(0.4 * m.duration()));
     }
-    for (const Footplant& p : d.plants) CHECK(p.skate < 0.05);
+    for (const motion::Footplant& p : d.plants) CHECK(p.skate < 0.05);
   }
   if (read == 0) WARN("skipped: no real clip found under " << kData);
 }

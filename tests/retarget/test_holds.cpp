@@ -5,6 +5,7 @@
 
 #include <limits>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <limits>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"

@@ -8,6 +8,7 @@
 #include <functional>
 #include <numbers>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"

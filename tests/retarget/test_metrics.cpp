@@ -11,6 +11,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"

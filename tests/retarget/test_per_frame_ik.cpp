@@ -9,6 +9,7 @@
 
 #include <catch2/catch.hpp>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -272,7 +273,7 @@ TEST_CASE("per-frame IK on real walks scaled to 60 %", "[per_frame_ik]") {
                                    .channels[static_cast<std::size_t>(target->channel_owner(c).second)]
                                    .kind))
         initial.values.col(c) *= scale;
-    const FootplantDetection detected = detect_footplants(source, {});
+    const motion::FootplantDetection detected = motion::detect_footplants(source, {});
     ConstraintSet set = footplant_constraints(detected, source.frame_count(),
                                               {.flavour = PlantFlavour::Floor, .above_floor = true});
     for (Constraint& c : set.constraints) {

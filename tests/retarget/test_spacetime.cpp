@@ -8,6 +8,7 @@
 #include <limits>
 #include <random>
 
+#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/spacetime.hpp"
@@ -454,7 +455,7 @@ TEST_CASE("spacetime: banded Cholesky agrees with a dense factorisation", "[spac
   std::mt19937 rng(11);
   std::uniform_real_distribution<double> u(-1, 1);
   for (const auto& [n, b] : {std::pair{1, 0}, std::pair{7, 0}, std::pair{40, 5}, std::pair{25, 24}}) {
-    BandedCholesky band;
+    numerics::BandedCholesky band;
     band.reset(n, b);
     Eigen::MatrixXd A = Eigen::MatrixXd::Zero(n, n);
     for (int i = 0; i < n; ++i) {
@@ -468,7 +469,7 @@ TEST_CASE("spacetime: banded Cholesky agrees with a dense factorisation", "[spac
     band.solve(y);
     CHECK((A * y - rhs).cwiseAbs().maxCoeff() < 1e-12);
   }
-  BandedCholesky indefinite;
+  numerics::BandedCholesky indefinite;
   indefinite.reset(2, 1);
   indefinite.at(0, 0) = 1;
   indefinite.at(1, 0) = 2;

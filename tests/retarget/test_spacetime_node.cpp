@@ -4,6 +4,7 @@
 
 #include <cmath>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/kinematics.hpp"

@@ -6,10 +6,11 @@
 #include <filesystem>
 #include <string>
 
+#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
@@ -216,7 +217,7 @@ TEST_CASE("target YAML errors name file:line:column", "[retarget][target]") {
     std::string message;
     try {
       kg::retarget::parse_target_yaml(fig.skeleton, c.text, "bad.yaml");
-    } catch (const kg::graph::Error& e) {
+    } catch (const kg::Error& e) {
       message = e.what();
     }
     INFO(message);

@@ -11,7 +11,7 @@
 
 #include <Eigen/Core>
 
-#include "kg/retime/body_model.hpp"
+#include "kg/body/body_model.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/path_torques.hpp"
 
@@ -23,8 +23,8 @@ inline std::shared_ptr<motion::Skeleton> skeleton_of(std::vector<motion::Joint> 
   return sk;
 }
 
-inline retime::BodyModel body_of(std::shared_ptr<const motion::Skeleton> sk, double mu) {
-  retime::BodyModel body;
+inline body::BodyModel body_of(std::shared_ptr<const motion::Skeleton> sk, double mu) {
+  body::BodyModel body;
   body.skeleton = sk;
   body.segments.resize(static_cast<std::size_t>(sk->joint_count()));
   body.segment_class.resize(static_cast<std::size_t>(sk->joint_count()));
@@ -49,7 +49,7 @@ inline retime::ContactFrame touching(std::shared_ptr<const motion::Skeleton> sk,
 // q' p̈) − m g − f.
 struct PointMass {
   std::shared_ptr<const motion::Skeleton> skeleton;
-  retime::BodyModel body;
+  body::BodyModel body;
   double mass = 1;
 
   retime::FrameTorques torques(const Eigen::Vector3d& qd, const Eigen::Vector3d& qdd) const {
@@ -77,7 +77,7 @@ inline PointMass point_mass(double mass, double mu = 0.5) {
 // leg's row is −f_y (it pushes the body up by the floor's vertical force).
 struct Leg {
   std::shared_ptr<const motion::Skeleton> skeleton;
-  retime::BodyModel body;
+  body::BodyModel body;
   double mass = 1;
 
   // q', q'' of the body (the leg channel's are zero: the leg keeps its length).
@@ -113,7 +113,7 @@ inline Leg leg(double mass, double leg_force, double mu = 0.5) {
 // term: the axis is fixed. τ = (m c'', I θ'') ṗ² + (m c', I θ') p̈ − (m g, 0) − Jᵀ f.
 struct PlanarBox {
   std::shared_ptr<const motion::Skeleton> skeleton;
-  retime::BodyModel body;
+  body::BodyModel body;
   double mass = 1, inertia = 1;
 
   retime::FrameTorques torques(const Eigen::Vector4d& qd, const Eigen::Vector4d& qdd) const {

@@ -13,25 +13,26 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "kg/retime/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/yaml_io.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/synth/figure.hpp"
 #include "kg/synth/synthesize.hpp"
 
 namespace fs = std::filesystem;
 using namespace kg;
-using retime::BodySpec;
-using retime::BodyTable;
-using retime::BuiltBody;
-using retime::SegmentClass;
+using body::BodySpec;
+using body::BodyTable;
+using body::BuiltBody;
+using body::SegmentClass;
 
 namespace {
 
@@ -63,9 +64,9 @@ std::set<std::string> joints_of(const BuiltBody& b, const std::string& cls) {
 
 // Every massive segment's inertia symmetric positive definite, and a rigid body's (triangle
 // inequality); massless ones all zero.
-void check_physical(const retime::BodyModel& body) {
+void check_physical(const body::BodyModel& body) {
   for (std::size_t j = 0; j < body.segments.size(); ++j) {
-    const retime::SegmentInertia& s = body.segments[j];
+    const body::SegmentInertia& s = body.segments[j];
     INFO(body.skeleton->joint(static_cast<int>(j)).name);
     CHECK(std::isfinite(s.mass));
     CHECK(s.mass >= 0);
@@ -83,7 +84,7 @@ void check_physical(const retime::BodyModel& body) {
 
 // CoM height above the lowest joint or End Site, as a fraction of the figure's vertical extent,
 // at frame values `frame`.
-double com_height_fraction(const retime::BodyModel& body, const Eigen::RowVectorXd& frame) {
+double com_height_fraction(const body::BodyModel& body, const Eigen::RowVectorXd& frame) {
   const motion::Skeleton& s = *body.skeleton;
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
   motion::forward_kinematics(s, frame, world);
@@ -97,7 +98,7 @@ double com_height_fraction(const retime::BodyModel& body, const Eigen::RowVector
       hi = std::max(hi, (w * e).y());
     }
   }
-  return (retime::body_com(body, frame).y() - lo) / (hi - lo);
+  return (body::body_com(body, frame).y() - lo) / (hi - lo);
 }
 
 std::shared_ptr<const motion::Skeleton> figure() {
@@ -107,8 +108,8 @@ std::shared_ptr<const motion::Skeleton> figure() {
 // The per-class masses a table gives for body mass M (both sides of a limb), after the rescale
 // to exactly M.
 double expected_class_mass(BodyTable t, SegmentClass c, double M) {
-  const retime::AnthropometricTable& table = retime::anthropometric_table(t);
-  return table.segment(c).mass * (retime::is_paired(c) ? 2 : 1) * M / table.mass_sum();
+  const body::AnthropometricTable& table = body::anthropometric_table(t);
+  return table.segment(c).mass * (body::is_paired(c) ? 2 : 1) * M / table.mass_sum();
 }
 
 // A CSV of the data's anthropometry folder: first column -> column `col` (0-based).
@@ -134,17 +135,17 @@ TEST_CASE("tables: fractions sum to 100% up to rounding, printed values, rigid-b
           "[retime][body]") {
   for (BodyTable t : {BodyTable::Dempster, BodyTable::ZatsiorskyMale, BodyTable::ZatsiorskyFemale,
                       BodyTable::DeLevaMale, BodyTable::DeLevaFemale}) {
-    const retime::AnthropometricTable& table = retime::anthropometric_table(t);
-    INFO(retime::to_string(t));
+    const body::AnthropometricTable& table = body::anthropometric_table(t);
+    INFO(body::to_string(t));
     CHECK(table.mass_sum() == Approx(1.0).margin(1.5e-4));  // de Leva female prints 99.99%
-    for (int c = 0; c < retime::kSegmentClassCount; ++c) {
-      const retime::SegmentFractions& f = table.segments[static_cast<std::size_t>(c)];
-      INFO(retime::to_string(static_cast<SegmentClass>(c)));
+    for (int c = 0; c < body::kSegmentClassCount; ++c) {
+      const body::SegmentFractions& f = table.segments[static_cast<std::size_t>(c)];
+      INFO(body::to_string(static_cast<SegmentClass>(c)));
       CHECK(f.mass > 0);
       CHECK(f.com > 0.3);
       CHECK(f.com < 0.8);
       // The radii must describe some rigid body.
-      CHECK_NOTHROW(retime::check_segment_inertia(
+      CHECK_NOTHROW(body::check_segment_inertia(
           Eigen::Vector3d(f.r_sagittal * f.r_sagittal, f.r_transverse * f.r_transverse,
                           f.r_longitudinal * f.r_longitudinal)
               .asDiagonal()
@@ -153,23 +154,23 @@ TEST_CASE("tables: fractions sum to 100% up to rounding, printed values, rigid-b
     }
   }
   using C = SegmentClass;
-  const auto& male = retime::anthropometric_table(BodyTable::DeLevaMale);
+  const auto& male = body::anthropometric_table(BodyTable::DeLevaMale);
   CHECK(male.segment(C::Thigh).mass == Approx(0.1416));
   CHECK(male.segment(C::Thigh).com == Approx(0.4095));
   CHECK(male.segment(C::HeadNeck).com == Approx(1 - 0.5002));  // printed from the vertex
   CHECK(male.segment(C::Trunk).com == Approx(1 - 0.5138));     // printed from C7
   CHECK(male.segment(C::Trunk).r_sagittal == Approx(0.328));
   CHECK(male.segment(C::Hand).r_longitudinal == Approx(0.401));
-  const auto& dempster = retime::anthropometric_table(BodyTable::Dempster);
+  const auto& dempster = body::anthropometric_table(BodyTable::Dempster);
   CHECK(dempster.segment(C::Trunk).mass == Approx(0.497));
   CHECK(dempster.segment(C::Foot).r_transverse == Approx(0.475));
-  CHECK(retime::anthropometric_table(BodyTable::ZatsiorskyMale).segment(C::UpperArm).mass == Approx(0.0270));
-  CHECK(retime::anthropometric_table(BodyTable::DeLevaFemale).segment(C::Thigh).mass == Approx(0.1478));
-  CHECK_THAT(thrown([] { retime::anthropometric_table(BodyTable::Cylinders); }), Catch::Contains("no table"));
-  for (const std::string& name : retime::body_table_names())
-    CHECK(retime::to_string(*retime::body_table_from_string(name)) == name);
-  for (const std::string& name : retime::segment_class_names())
-    CHECK(retime::to_string(*retime::segment_class_from_string(name)) == name);
+  CHECK(body::anthropometric_table(BodyTable::ZatsiorskyMale).segment(C::UpperArm).mass == Approx(0.0270));
+  CHECK(body::anthropometric_table(BodyTable::DeLevaFemale).segment(C::Thigh).mass == Approx(0.1478));
+  CHECK_THAT(thrown([] { body::anthropometric_table(BodyTable::Cylinders); }), Catch::Contains("no table"));
+  for (const std::string& name : body::body_table_names())
+    CHECK(body::to_string(*body::body_table_from_string(name)) == name);
+  for (const std::string& name : body::segment_class_names())
+    CHECK(body::to_string(*body::segment_class_from_string(name)) == name);
 }
 
 TEST_CASE("embedded mass fractions agree with the data's anthropometry CSVs", "[retime][body][data]") {
@@ -180,7 +181,7 @@ TEST_CASE("embedded mass fractions agree with the data's anthropometry CSVs", "[
     return;
   }
   using C = SegmentClass;
-  auto pct = [](BodyTable t, C c) { return 100 * retime::anthropometric_table(t).segment(c).mass; };
+  auto pct = [](BodyTable t, C c) { return 100 * body::anthropometric_table(t).segment(c).mass; };
 
   // Zatsiorsky-Seluyanov male: the CSV's printed fractions, exactly.
   const auto zm = read_csv(dir / "zats-selu1979m.csv", 1);
@@ -227,8 +228,8 @@ TEST_CASE("embedded mass fractions agree with the data's anthropometry CSVs", "[
 TEST_CASE("synthetic figure: classes, masses by class and by bone length, CoM height, inertias",
           "[retime][body]") {
   const auto skel = figure();
-  const BuiltBody b = retime::build_body_model(skel, BodySpec{});
-  const retime::BodyModel& body = b.body;
+  const BuiltBody b = body::build_body_model(skel, BodySpec{});
+  const body::BodyModel& body = b.body;
   CHECK(body.total_mass() == Approx(70).epsilon(1e-12));
   CHECK(joints_of(b, "trunk") == std::set<std::string>{"Hips", "Spine", "Chest"});
   CHECK(joints_of(b, "head_neck") == std::set<std::string>{"Neck", "Head"});
@@ -236,7 +237,7 @@ TEST_CASE("synthetic figure: classes, masses by class and by bone length, CoM he
   CHECK(joints_of(b, "foot") ==
         std::set<std::string>{"LeftFoot", "LeftToeBase", "RightFoot", "RightToeBase"});
   CHECK(joints_of(b, "") == std::set<std::string>{"LeftShoulder", "RightShoulder"});
-  for (int c = 0; c < retime::kSegmentClassCount; ++c)
+  for (int c = 0; c < body::kSegmentClassCount; ++c)
     CHECK(
         b.class_mass[static_cast<std::size_t>(c)] ==
         Approx(expected_class_mass(BodyTable::DeLevaMale, static_cast<SegmentClass>(c), 70)).epsilon(1e-12));
@@ -264,10 +265,10 @@ TEST_CASE("synthetic figure: classes, masses by class and by bone length, CoM he
   double trunk_mass = 0, trunk_length = 0, torsion = 0;
   Eigen::Vector3d trunk_com = Eigen::Vector3d::Zero();
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(skel->joint_count()));
-  motion::forward_kinematics(*skel, retime::rest_pose_values(*skel), world);
+  motion::forward_kinematics(*skel, body::rest_pose_values(*skel), world);
   for (const char* name : {"Hips", "Spine", "Chest"}) {
     const int j = joint(*skel, name);
-    const retime::SegmentInertia& s = body.segments[static_cast<std::size_t>(j)];
+    const body::SegmentInertia& s = body.segments[static_cast<std::size_t>(j)];
     trunk_mass += s.mass;
     trunk_length += b.bones[static_cast<std::size_t>(j)].norm();
     torsion += s.inertia(1, 1);
@@ -282,14 +283,14 @@ TEST_CASE("synthetic figure: classes, masses by class and by bone length, CoM he
   double about_x = 0;
   for (const char* name : {"Hips", "Spine", "Chest"}) {
     const int j = joint(*skel, name);
-    const retime::SegmentInertia& s = body.segments[static_cast<std::size_t>(j)];
+    const body::SegmentInertia& s = body.segments[static_cast<std::size_t>(j)];
     const double dy = (world[static_cast<std::size_t>(j)] * s.com).y() - trunk_com.y();
     about_x += s.inertia(0, 0) + s.mass * dy * dy;
   }
   CHECK(about_x == Approx(trunk_mass * std::pow(0.306 * trunk_length, 2)).epsilon(0.05));
   check_physical(body);
   // Standing, arms down: the CoM at about 55% of the stature (the figure spans it exactly).
-  const double h = com_height_fraction(body, retime::rest_pose_values(*skel));
+  const double h = com_height_fraction(body, body::rest_pose_values(*skel));
   CHECK(h > 0.53);
   CHECK(h < 0.58);
   // Root channels unactuated; every other channel unlimited.
@@ -308,17 +309,17 @@ TEST_CASE("every table on one figure: masses by class follow the table, rescaled
   const auto skel = figure();
   for (BodyTable t : {BodyTable::Dempster, BodyTable::ZatsiorskyMale, BodyTable::ZatsiorskyFemale,
                       BodyTable::DeLevaMale, BodyTable::DeLevaFemale}) {
-    INFO(retime::to_string(t));
+    INFO(body::to_string(t));
     BodySpec spec;
     spec.table = t;
     spec.mass = 61.9;
-    const BuiltBody b = retime::build_body_model(skel, spec);
+    const BuiltBody b = body::build_body_model(skel, spec);
     CHECK(b.body.total_mass() == Approx(61.9).epsilon(1e-12));
-    for (int c = 0; c < retime::kSegmentClassCount; ++c)
+    for (int c = 0; c < body::kSegmentClassCount; ++c)
       CHECK(b.class_mass[static_cast<std::size_t>(c)] ==
             Approx(expected_class_mass(t, static_cast<SegmentClass>(c), 61.9)).epsilon(1e-12));
     check_physical(b.body);
-    const double h = com_height_fraction(b.body, retime::rest_pose_values(*skel));
+    const double h = com_height_fraction(b.body, body::rest_pose_values(*skel));
     CHECK(h > 0.52);
     CHECK(h < 0.59);
   }
@@ -441,8 +442,8 @@ TEST_CASE("the data's skeletons: classes, masses by class, CoM height, floating 
     }
     const motion::Motion& m = in.motion;
     const Eigen::RowVectorXd ref =
-        c.frame0 ? Eigen::RowVectorXd(m.values.row(0)) : retime::rest_pose_values(*m.skeleton);
-    const BuiltBody b = retime::build_body_model(m.skeleton, BodySpec{}, &ref);
+        c.frame0 ? Eigen::RowVectorXd(m.values.row(0)) : body::rest_pose_values(*m.skeleton);
+    const BuiltBody b = body::build_body_model(m.skeleton, BodySpec{}, &ref);
     for (const auto& [cls, names] : c.classes) {
       INFO("class '" << cls << "'");
       const std::set<std::string> got = joints_of(b, cls);
@@ -453,7 +454,7 @@ TEST_CASE("the data's skeletons: classes, masses by class, CoM height, floating 
       }
     }
     CHECK(b.body.total_mass() == Approx(70).epsilon(1e-12));
-    for (int k = 0; k < retime::kSegmentClassCount; ++k)
+    for (int k = 0; k < body::kSegmentClassCount; ++k)
       CHECK(b.class_mass[static_cast<std::size_t>(k)] ==
             Approx(expected_class_mass(BodyTable::DeLevaMale, static_cast<SegmentClass>(k), 70))
                 .epsilon(1e-12));
@@ -482,7 +483,7 @@ TEST_CASE("CMU 16.asf: each side's limb mass, shared by bone length; the root ca
   }
   const io::ImportedMotion in = io::import_asf_amc(asf.string(), amc.string(), {});
   const motion::Skeleton& s = *in.motion.skeleton;
-  const BuiltBody b = retime::build_body_model(in.motion.skeleton, BodySpec{});
+  const BuiltBody b = body::build_body_model(in.motion.skeleton, BodySpec{});
   auto mass = [&](const std::string& n) {
     return b.body.segments[static_cast<std::size_t>(joint(s, n))].mass;
   };
@@ -539,10 +540,10 @@ TEST_CASE("cylinders of water: masses from volumes, or rescaled to a mass", "[re
   BodySpec spec;
   spec.table = BodyTable::Cylinders;
   spec.mass = 0;
-  const BuiltBody b = retime::build_body_model(s, spec);
-  const auto r = retime::default_cylinder_radii();
+  const BuiltBody b = body::build_body_model(s, spec);
+  const auto r = body::default_cylinder_radii();
   auto volume_mass = [](double radius, double length) { return 1000 * M_PI * radius * radius * length; };
-  auto idx = [](SegmentClass c) { return static_cast<std::size_t>(retime::index_of(c)); };
+  auto idx = [](SegmentClass c) { return static_cast<std::size_t>(body::index_of(c)); };
   const auto seg = [&](const std::string& n) {
     return b.body.segments[static_cast<std::size_t>(joint(*s, n))];
   };
@@ -556,7 +557,7 @@ TEST_CASE("cylinders of water: masses from volumes, or rescaled to a mass", "[re
   CHECK(b.body.total_mass() == Approx(total));
   // A solid cylinder: m r²/2 about its axis (the thigh points down -Y), m (3r² + l²)/12 across;
   // CoM at the middle.
-  const retime::SegmentInertia thigh = seg("LeftUpLeg");
+  const body::SegmentInertia thigh = seg("LeftUpLeg");
   const double rt = r[idx(SegmentClass::Thigh)];
   CHECK(thigh.inertia(1, 1) == Approx(thigh.mass * rt * rt / 2));
   CHECK(thigh.inertia(0, 0) == Approx(thigh.mass * (3 * rt * rt + 0.45 * 0.45) / 12));
@@ -566,7 +567,7 @@ TEST_CASE("cylinders of water: masses from volumes, or rescaled to a mass", "[re
 
   // A mass rescales every segment alike (a density).
   spec.mass = 80;
-  const BuiltBody scaled = retime::build_body_model(s, spec);
+  const BuiltBody scaled = body::build_body_model(s, spec);
   CHECK(scaled.body.total_mass() == Approx(80));
   const double k = 80 / total;
   CHECK(scaled.body.segments[static_cast<std::size_t>(joint(*s, "LeftUpLeg"))].mass ==
@@ -575,9 +576,9 @@ TEST_CASE("cylinders of water: masses from volumes, or rescaled to a mass", "[re
       k * thigh.inertia));
 
   // Radii from a body file.
-  const retime::LoadedBodySpec f =
-      retime::parse_body_yaml("version: 1\ntable: cylinders\nmass: 0\nradii: {thigh: 0.1}\n", "cyl.yaml");
-  const BuiltBody wide = retime::build_body_model(s, f.spec);
+  const body::LoadedBodySpec f =
+      body::parse_body_yaml("version: 1\ntable: cylinders\nmass: 0\nradii: {thigh: 0.1}\n", "cyl.yaml");
+  const BuiltBody wide = body::build_body_model(s, f.spec);
   CHECK(wide.body.segments[static_cast<std::size_t>(joint(*s, "LeftUpLeg"))].mass ==
         Approx(volume_mass(0.1, 0.45)));
   CHECK(wide.body.segments[static_cast<std::size_t>(joint(*s, "LeftLeg"))].mass ==
@@ -605,18 +606,18 @@ TEST_CASE("body file: table, mass, classes, overrides, torque limits, friction, 
       "  \".*\": 150\n"
       "friction: 0.8\n"
       "gravity: [1, -9, 0]\n";
-  const retime::LoadedBodySpec f = retime::parse_body_yaml(text, "body.yaml");
+  const body::LoadedBodySpec f = body::parse_body_yaml(text, "body.yaml");
   CHECK(f.given == std::vector<std::string>{"table", "mass", "classes", "segments", "torque_limits",
                                             "friction", "gravity"});
-  const BuiltBody b = retime::build_body_model(skel, f.spec);
+  const BuiltBody b = body::build_body_model(skel, f.spec);
   const motion::Skeleton& s = *skel;
   auto seg = [&](const std::string& n) { return b.body.segments[static_cast<std::size_t>(joint(s, n))]; };
   CHECK(b.body.segment_class[static_cast<std::size_t>(joint(s, "LeftShoulder"))] == "trunk");
   // Dempster's thigh is 10% of 80 kg; ten times that now.
   CHECK(seg("LeftUpLeg").mass ==
-        Approx(10 * 0.100 * 80 / retime::anthropometric_table(BodyTable::Dempster).mass_sum()));
+        Approx(10 * 0.100 * 80 / body::anthropometric_table(BodyTable::Dempster).mass_sum()));
   CHECK(seg("RightUpLeg").mass ==
-        Approx(0.100 * 80 / retime::anthropometric_table(BodyTable::Dempster).mass_sum()));
+        Approx(0.100 * 80 / body::anthropometric_table(BodyTable::Dempster).mass_sum()));
   CHECK(seg("LeftArm").mass == Approx(2.5));
   CHECK(seg("LeftShoulder").mass == Approx(2.5));  // a trunk piece now, so it may take a mass
   CHECK((seg("Head").com - Eigen::Vector3d(0, 0.1, 0.02)).norm() < 1e-12);
@@ -649,7 +650,7 @@ TEST_CASE("body file: table, mass, classes, overrides, torque limits, friction, 
   BodySpec base;
   base.mass = 55;
   base.friction = 0.3;
-  const retime::LoadedBodySpec g = retime::parse_body_yaml("version: 1\ngravity: 1.62\n", "moon.yaml", base);
+  const body::LoadedBodySpec g = body::parse_body_yaml("version: 1\ngravity: 1.62\n", "moon.yaml", base);
   CHECK(g.spec.gravity.isApprox(Eigen::Vector3d(0, -1.62, 0)));
   CHECK(g.spec.mass == 55);
   CHECK(g.spec.friction == 0.3);
@@ -718,8 +719,8 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
     INFO(c.text);
     std::string message;
     try {
-      retime::parse_body_yaml(c.text, "bad.yaml");
-    } catch (const graph::Error& e) {
+      body::parse_body_yaml(c.text, "bad.yaml");
+    } catch (const kg::Error& e) {
       message = e.what();
     }
     INFO(message);
@@ -746,8 +747,8 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
     INFO(c.text);
     std::string message;
     try {
-      retime::build_body_model(skel, retime::parse_body_yaml(c.text, "bad.yaml").spec);
-    } catch (const graph::Error& e) {
+      body::build_body_model(skel, body::parse_body_yaml(c.text, "bad.yaml").spec);
+    } catch (const kg::Error& e) {
       message = e.what();
     }
     INFO(message);
@@ -761,20 +762,20 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
   (void)root_end;
   CHECK_THAT(
       thrown([&] {
-        retime::build_body_model(
+        body::build_body_model(
             tiny,
-            retime::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {mass: 1}\n", "z.yaml").spec);
+            body::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {mass: 1}\n", "z.yaml").spec);
       }),
       Catch::Contains("z.yaml:3:3: segments 'LeftHandEnd': joint 'LeftHandEnd' has no bone, so no shape"));
   CHECK_THAT(
       thrown([&] {
-        retime::build_body_model(
+        body::build_body_model(
             tiny,
-            retime::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {radius: 0.1}\n", "z.yaml").spec);
+            body::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {radius: 0.1}\n", "z.yaml").spec);
       }),
       Catch::Contains("has no bone for a cylinder along it"));
-  const BuiltBody given = retime::build_body_model(
-      tiny, retime::parse_body_yaml(
+  const BuiltBody given = body::build_body_model(
+      tiny, body::parse_body_yaml(
                 "version: 1\nsegments:\n  LeftHandEnd: {mass: 1, inertia: [1e-3, 1e-3, 1e-3]}\n", "z.yaml")
                 .spec);
   CHECK(given.body.segments.back().mass == 1);
@@ -786,22 +787,22 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
     if (jt.name.find("UpLeg") != std::string::npos) jt.name.replace(jt.name.find("UpLeg"), 5, "Femur");
     no_legs->add_joint(jt);
   }
-  const std::string missing = thrown([&] { retime::build_body_model(no_legs, BodySpec{}); });
+  const std::string missing = thrown([&] { body::build_body_model(no_legs, BodySpec{}); });
   INFO(missing);
   CHECK(missing.find("lacks table segments: thigh (no joint matched; expected a left and a right)") !=
         std::string::npos);
   CHECK(missing.find("classes:\n    \"LeftUpLeg|RightUpLeg\": thigh") != std::string::npos);
   CHECK(missing.find("LeftFemur") != std::string::npos);  // among the joints without a class
   // Mapped in a file, it builds.
-  const retime::LoadedBodySpec fixed =
-      retime::parse_body_yaml("version: 1\nclasses:\n  \"(Left|Right)Femur\": thigh\n", "legs.yaml");
-  CHECK(retime::build_body_model(no_legs, fixed.spec)
-            .class_mass[static_cast<std::size_t>(retime::index_of(SegmentClass::Thigh))] ==
+  const body::LoadedBodySpec fixed =
+      body::parse_body_yaml("version: 1\nclasses:\n  \"(Left|Right)Femur\": thigh\n", "legs.yaml");
+  CHECK(body::build_body_model(no_legs, fixed.spec)
+            .class_mass[static_cast<std::size_t>(body::index_of(SegmentClass::Thigh))] ==
         Approx(2 * 0.1416 * 70));
   // Only one thigh: two runs expected.
   const std::string one = thrown([&] {
-    retime::build_body_model(
-        no_legs, retime::parse_body_yaml("version: 1\nclasses:\n  LeftFemur: thigh\n", "l.yaml").spec);
+    body::build_body_model(
+        no_legs, body::parse_body_yaml("version: 1\nclasses:\n  LeftFemur: thigh\n", "l.yaml").spec);
   });
   CHECK(one.find("thigh (1 separate runs of joints: LeftFemur; expected a left and a right)") !=
         std::string::npos);
@@ -809,33 +810,33 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
   // Programmatic specs are checked too.
   BodySpec bad;
   bad.mass = 0;
-  CHECK_THAT(thrown([&] { retime::build_body_model(skel, bad); }), Catch::Contains("expected > 0"));
+  CHECK_THAT(thrown([&] { body::build_body_model(skel, bad); }), Catch::Contains("expected > 0"));
   bad = BodySpec{};
   bad.friction = NAN;
-  CHECK_THAT(thrown([&] { retime::build_body_model(skel, bad); }), Catch::Contains("friction"));
+  CHECK_THAT(thrown([&] { body::build_body_model(skel, bad); }), Catch::Contains("friction"));
   bad = BodySpec{};
   bad.radii[0] = -1;
-  CHECK_THAT(thrown([&] { retime::build_body_model(skel, bad); }),
+  CHECK_THAT(thrown([&] { body::build_body_model(skel, bad); }),
              Catch::Contains("cylinder radius of head_neck"));
-  CHECK_THAT(thrown([&] { retime::load_body_yaml("/nonexistent/body.yaml"); }), Catch::Contains("body.yaml"));
+  CHECK_THAT(thrown([&] { body::load_body_yaml("/nonexistent/body.yaml"); }), Catch::Contains("body.yaml"));
 }
 
 TEST_CASE("check_body_model refuses inconsistent models", "[retime][body]") {
-  const BuiltBody b = retime::build_body_model(figure(), BodySpec{});
-  CHECK_NOTHROW(retime::check_body_model(b.body));
-  retime::BodyModel m = b.body;
+  const BuiltBody b = body::build_body_model(figure(), BodySpec{});
+  CHECK_NOTHROW(body::check_body_model(b.body));
+  body::BodyModel m = b.body;
   m.segments.pop_back();
-  CHECK_THAT(thrown([&] { retime::check_body_model(m); }), Catch::Contains("segments and"));
+  CHECK_THAT(thrown([&] { body::check_body_model(m); }), Catch::Contains("segments and"));
   m = b.body;
   m.segments[5].inertia(0, 0) = -1;
-  CHECK_THAT(thrown([&] { retime::check_body_model(m); }), Catch::Contains("inertia"));
+  CHECK_THAT(thrown([&] { body::check_body_model(m); }), Catch::Contains("inertia"));
   m = b.body;
   m.torque_min[10] = 5;
   m.torque_max[10] = 1;
-  CHECK_THAT(thrown([&] { retime::check_body_model(m); }), Catch::Contains("bounds [5, 1]"));
+  CHECK_THAT(thrown([&] { body::check_body_model(m); }), Catch::Contains("bounds [5, 1]"));
   m = b.body;
   m.segments[3].mass = -1;
-  CHECK_THAT(thrown([&] { retime::check_body_model(m); }), Catch::Contains("mass -1"));
+  CHECK_THAT(thrown([&] { body::check_body_model(m); }), Catch::Contains("mass -1"));
 }
 
 TEST_CASE("retime.body_model node: params, a body file, the log, and errors", "[retime][body][node]") {
@@ -845,7 +846,7 @@ TEST_CASE("retime.body_model node: params, a body file, the log, and errors", "[
     test::NodeContext ctx = test::run_node(registry, "retime.body_model",
                                            test::params_for(registry, "retime.body_model", {{"mass", 80.0}}),
                                            {{"motion", graph::Value::make(walk.motion)}});
-    const retime::BodyModel& body = ctx.outputs.at("body").get<retime::BodyModel>();
+    const body::BodyModel& body = ctx.outputs.at("body").get<body::BodyModel>();
     CHECK(body.total_mass() == Approx(80));
     CHECK(body.skeleton == walk.motion.skeleton);
     CHECK(std::get<double>(ctx.figures.at("total_mass")) == Approx(80));
@@ -869,7 +870,7 @@ TEST_CASE("retime.body_model node: params, a body file, the log, and errors", "[
                      test::params_for(registry, "retime.body_model",
                                       {{"file", file.string()}, {"table", std::string("dempster")}}),
                      {{"motion", graph::Value::make(walk.motion)}});
-  const retime::BodyModel& body = ctx.outputs.at("body").get<retime::BodyModel>();
+  const body::BodyModel& body = ctx.outputs.at("body").get<body::BodyModel>();
   CHECK(body.gravity.isApprox(Eigen::Vector3d(0, -3.7, 0)));
   CHECK(ctx.logged("sets mass = 60 kg (param mass = 70 kg not used)"));
   CHECK(ctx.logged("sets gravity = [0, -3.7, 0] m/s²"));
@@ -914,7 +915,7 @@ TEST_CASE("retime.body_model in a graph: a synthesized jump's body through load_
       {.jobs = 1, .on_log = [&](const std::string&, const std::string& m) { logs.push_back(m); }});
   INFO((r.nodes.size() > 1 ? r.nodes[1].message : std::string()));
   REQUIRE(r.ok);
-  const retime::BodyModel& body = r.outputs.at("body.body").get<retime::BodyModel>();
+  const body::BodyModel& body = r.outputs.at("body.body").get<body::BodyModel>();
   CHECK(body.friction == 0.7);
   // A 1.75 m figure of water cylinders weighs about 69 kg (anthropometry.hpp's radii).
   CHECK(body.total_mass() > 60);
@@ -949,12 +950,12 @@ TEST_CASE("one take in two formats (16_15 as ASF/AMC and as MotionBuilder BVH) h
   const motion::Motion b = io::import_bvh(bvh, {}).motion;
   REQUIRE(a.frame_count() == b.frame_count());
   const Eigen::RowVectorXd ra = a.values.row(0), rb = b.values.row(0);
-  const BuiltBody ba = retime::build_body_model(a.skeleton, BodySpec{}, &ra);
-  const BuiltBody bb = retime::build_body_model(b.skeleton, BodySpec{}, &rb);
+  const BuiltBody ba = body::build_body_model(a.skeleton, BodySpec{}, &ra);
+  const BuiltBody bb = body::build_body_model(b.skeleton, BodySpec{}, &rb);
   for (int f : {0, a.frame_count() / 2, a.frame_count() - 1}) {
     INFO("frame " << f);
-    const Eigen::Vector3d ca = retime::body_com(ba.body, a.values.row(f)),
-                          cb = retime::body_com(bb.body, b.values.row(f));
+    const Eigen::Vector3d ca = body::body_com(ba.body, a.values.row(f)),
+                          cb = body::body_com(bb.body, b.values.row(f));
     CHECK((ca - cb).norm() < 1e-3);
   }
   for (const char* name : {"root", "lowerback", "lfemur", "rtibia", "lfoot", "ltoes", "head", "rwrist"}) {

@@ -6,10 +6,11 @@
 #include <filesystem>
 #include <sstream>
 
+#include "kg/retime/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -18,6 +19,7 @@
 
 using namespace kg;
 using namespace kg::retime;
+using namespace kg::body;
 
 namespace {
 
@@ -435,7 +437,7 @@ patches:
       try {
         read_contacts_string(b.text, "bad.yaml", m);
         FAIL("no error");
-      } catch (const graph::Error& e) {
+      } catch (const kg::Error& e) {
         CHECK_THAT(e.what(), Catch::Contains(b.message));
         CHECK_THAT(e.what(), Catch::StartsWith(b.where));
       }

@@ -42,7 +42,7 @@
 using namespace kg;
 using Catch::Matchers::Contains;
 using motion::ChannelKind;
-using retime::BodyModel;
+using body::BodyModel;
 
 namespace {
 
@@ -133,7 +133,7 @@ BodyModel random_body(std::shared_ptr<const motion::Skeleton> s, std::mt19937& r
   BodyModel b;
   b.skeleton = s;
   b.segments.resize(static_cast<std::size_t>(s->joint_count()));
-  for (retime::SegmentInertia& seg : b.segments) {
+  for (body::SegmentInertia& seg : b.segments) {
     if (rng() % 5 == 0) continue;
     seg.mass = uniform(rng, 0.5, 8);
     seg.com = random_vector(rng, 0.3);
@@ -285,7 +285,7 @@ void check_against_kinematics(const BodyModel& body, const Eigen::VectorXd& q, s
   Eigen::VectorXd gravity_torque = Eigen::VectorXd::Zero(n);
   const Eigen::Vector3d g(0.4, -9.81, 1.3);
   for (int j = 0; j < s.joint_count(); ++j) {
-    const retime::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
+    const body::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
     motion::point_jacobian(s, q.transpose(), world, j, seg.com, J);
     const Eigen::Matrix3d R = world[static_cast<std::size_t>(j)].linear();
     const Eigen::Vector3d w = omega[static_cast<std::size_t>(j)];
@@ -398,7 +398,7 @@ struct KdlInput {
 // Our channel values in KDL's joint order (DynamicsTopology's).
 KdlInput kdl_input(const motion::Skeleton& s, const Eigen::VectorXd& q, const Eigen::VectorXd& qd,
                    const Eigen::VectorXd& qdd) {
-  const std::vector<int> order = retime::DynamicsTopology::of(s).order;
+  const std::vector<int> order = body::DynamicsTopology::of(s).order;
   const auto n = static_cast<unsigned>(order.size());
   KdlInput in{KDL::JntArray(n), KDL::JntArray(n), KDL::JntArray(n)};
   for (unsigned i = 0; i < n; ++i) {
@@ -410,7 +410,7 @@ KdlInput kdl_input(const motion::Skeleton& s, const Eigen::VectorXd& q, const Ei
 }
 
 Eigen::VectorXd from_kdl(const motion::Skeleton& s, const KDL::JntArray& tau) {
-  const std::vector<int> order = retime::DynamicsTopology::of(s).order;
+  const std::vector<int> order = body::DynamicsTopology::of(s).order;
   Eigen::VectorXd out(s.channel_count());
   for (std::size_t i = 0; i < order.size(); ++i) out[order[i]] = tau(static_cast<unsigned>(i));
   return out;

@@ -11,6 +11,7 @@
 
 using namespace kg;
 using namespace kg::retime;
+using namespace kg::body;
 using kg::test::touching;
 
 namespace {

@@ -10,6 +10,7 @@
 #include "kg/retime/retime_clip.hpp"
 
 using namespace kg::retime;
+using namespace kg::body;
 
 namespace {
 

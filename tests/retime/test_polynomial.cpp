@@ -12,6 +12,7 @@
 #include "kg/retime/polynomial.hpp"
 
 using namespace kg::retime;
+using namespace kg::body;
 using Catch::Matchers::Contains;
 
 namespace {

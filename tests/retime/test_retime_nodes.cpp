@@ -8,10 +8,11 @@
 #include <thread>
 #include <tuple>
 
+#include "kg/retime/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
@@ -25,7 +26,7 @@ namespace {
 // retime.hulls' inputs for a synthesized walk at 30 Hz, each a value of its own.
 std::map<std::string, graph::Value> walk_inputs() {
   const motion::Motion walk = motion::resample(synth::synthesize_walk({.steps = 2}).motion, 30);
-  const retime::BodyModel body = retime::build_body_model(walk.skeleton, {}).body;
+  const body::BodyModel body = body::build_body_model(walk.skeleton, {}).body;
   return {{"body", graph::Value::make(body)},
           {"contacts", graph::Value::make(retime::detect_contacts(walk, {}))},
           {"torques", graph::Value::make(retime::path_torques(body, walk, retime::path_derivatives(walk)))}};

@@ -1,4 +1,4 @@
-// Test and bench support: a body model (kg/retime/body_model.hpp) as KDL segments, to check and
+// Test and bench support: a body model (kg/body/body_model.hpp) as KDL segments, to check and
 // time inverse dynamics against KDL's ChainIdSolver_RNE and TreeIdSolver_RNE (Debian
 // liborocos-kdl-dev; include only where KG_HAVE_KDL is defined).
 //
@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "kg/retime/body_model.hpp"
+#include "kg/body/body_model.hpp"
 
 namespace kg::test {
 
@@ -38,7 +38,7 @@ struct KdlBody {
   std::vector<int> last_chain_segment;    // per joint: that segment's index in `chain`
 };
 
-inline KdlBody kdl_body(const retime::BodyModel& body) {
+inline KdlBody kdl_body(const body::BodyModel& body) {
   const motion::Skeleton& s = *body.skeleton;
   KdlBody k;
   bool is_chain = true;
@@ -58,7 +58,7 @@ inline KdlBody kdl_body(const retime::BodyModel& body) {
         joints.emplace_back(KDL::Vector::Zero(),
                             kdl(Eigen::Vector3d(jt.axis.col(motion::axis_index(c.kind)))),
                             KDL::Joint::RotAxis);
-    const retime::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
+    const body::SegmentInertia& seg = body.segments[static_cast<std::size_t>(j)];
     const Eigen::Matrix3d& I = seg.inertia;
     const KDL::RigidBodyInertia inertia(
         seg.mass, kdl(seg.com), KDL::RotationalInertia(I(0, 0), I(1, 1), I(2, 2), I(0, 1), I(0, 2), I(1, 2)));

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "kg/retime/body_build.hpp"
+#include "kg/body/body_build.hpp"
 #include "synth_test_util.hpp"
 
 using namespace kg;
@@ -32,9 +32,9 @@ TEST_CASE("jump: the body's centre of mass flies exactly ballistically", "[synth
     const Synthesis s = synthesize_jump(o);
     const Kinematics k(s.motion);
     // The mass model the synthesizer and retime.body_model share by default (de Leva, male).
-    const Eigen::RowVectorXd rest = retime::rest_pose_values(*s.motion.skeleton);
-    const retime::BodyModel body = retime::build_body_model(s.motion.skeleton, {}, &rest).body;
-    auto com = [&](int f) { return retime::body_com(body, s.motion.values.row(f)); };
+    const Eigen::RowVectorXd rest = body::rest_pose_values(*s.motion.skeleton);
+    const body::BodyModel body = body::build_body_model(s.motion.skeleton, {}, &rest).body;
+    auto com = [&](int f) { return body::body_com(body, s.motion.values.row(f)); };
     // The shift that makes it so fades in and out within 15% of the flight at either end.
     const double fps = s.motion.fps, flight = s.flight_end - s.flight_start;
     const int f0 = int(std::ceil((s.flight_start + 0.15 * flight) * fps)) + 1;

@@ -1,7 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include "kg/motion/nodes.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/graph/yaml_io.hpp"

@@ -13,7 +13,7 @@
 #include <string>
 #include <thread>
 
-#include "kg/graph/atomic_file.hpp"
+#include "kg/base/atomic_file.hpp"
 #include "kg/graph/plugin_abi.hpp"
 
 namespace {
@@ -63,7 +63,7 @@ class Print final : public kg::graph::Node {
     const double value = ctx.input<double>("value");
     char text[64];
     std::snprintf(text, sizeof text, "%.17g\n", value);
-    kg::graph::write_file_atomically(path_, [&](std::ostream& os) {
+    kg::write_file_atomically(path_, [&](std::ostream& os) {
       os << text[0] << std::flush;  // what an interrupted write would leave behind
       std::this_thread::sleep_for(std::chrono::duration<double>(write_seconds_));
       os << text + 1;
@@ -82,7 +82,7 @@ class ReadNumber final : public kg::graph::Node {
  public:
   explicit ReadNumber(const Params& p) : path_(p.get<std::string>("path")) {}
   void run(RunContext& ctx) const override {
-    const std::string text = kg::graph::read_input_file(path_, "number file");
+    const std::string text = kg::read_input_file(path_, "number file");
     if (text.rfind("abort", 0) == 0) std::abort();
     std::size_t used = 0;
     double value = 0;

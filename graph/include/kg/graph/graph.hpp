@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 #include "kg/graph/params.hpp"
 #include "kg/graph/registry.hpp"
 

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "kg/graph/error.hpp"
+#include "kg/base/error.hpp"
 
 namespace kg::graph {
 

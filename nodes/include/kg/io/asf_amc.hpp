@@ -1,5 +1,5 @@
 // Acclaim ASF (skeleton) and AMC (motion) files, as written by Vicon for the CMU database.
-// Parsers are strict: anything malformed or truncated throws kg::graph::Error whose what() is
+// Parsers are strict: anything malformed or truncated throws kg::Error whose what() is
 // "file:line:column: expected ..., got ...". They never crash on bad input.
 //
 //   AsfSkeleton asf = read_asf("16.asf");                 // file lengths, radians
@@ -79,7 +79,7 @@ struct AsfSkeleton {
 
 // Parses ASF text; `path` only names the file in messages.
 AsfSkeleton parse_asf(std::string_view text, const std::string& path);
-// Reads and parses a file; a file that cannot be opened throws kg::graph::Error naming it.
+// Reads and parses a file; a file that cannot be opened throws kg::Error naming it.
 AsfSkeleton read_asf(const std::string& path);
 
 // CMU's capture rate; AMC files carry none.

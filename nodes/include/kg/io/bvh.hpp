@@ -10,7 +10,7 @@
 //   for (const std::string& note : in.notes) std::cerr << note << '\n';      // what auto chose
 //   write_bvh(os, in.motion, BvhWriteOptions{.units = "cm", .precision = 6});
 //
-// Errors: any malformed or truncated file throws kg::graph::Error whose what() is
+// Errors: any malformed or truncated file throws kg::Error whose what() is
 // "file:line:column: expected ..., got ...". Nothing is read past the end of the text.
 #pragma once
 
@@ -38,14 +38,14 @@ struct BvhClip {
 // Parses BVH text. `file_name` only names the file in error messages and gives motion.name.
 // Accepts: any channel order and count (0..6, no channel twice) per joint, position channels
 // on any joint, End Sites, several ROOTs, LF or CRLF line ends, blanks and tabs, keywords and
-// channel names in any letter case, a UTF-8 BOM. Refuses (kg::graph::Error): missing
+// channel names in any letter case, a UTF-8 BOM. Refuses (kg::Error): missing
 // HIERARCHY/ROOT/MOTION/Frames:/Frame Time:, unknown or repeated channel names, CHANNELS n not
 // followed by exactly n names on its line, unbalanced braces, a non-numeric, NaN or infinite
 // number, a frame time <= 0, a frame line with too few or too many values, fewer frame lines
 // than "Frames:" says or anything but blanks after the last one, duplicate joint names.
 BvhClip parse_bvh(std::string_view text, const std::string& file_name);
 
-// Reads the whole file at once and parses it; an unreadable file throws kg::graph::Error
+// Reads the whole file at once and parses it; an unreadable file throws kg::Error
 // naming it.
 BvhClip read_bvh(const std::filesystem::path& path);
 

@@ -11,7 +11,6 @@
 #include <string>
 #include <vector>
 
-#include "kg/graph/node_spec.hpp"
 #include "kg/motion/motion.hpp"
 
 namespace kg::io {
@@ -40,10 +39,6 @@ struct ImportedMotion {
 
 // Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.
 double metres_per_unit(const std::string& units);
-
-// The params every importer node declares for ImportOptions (units, up, fps), and reading them.
-std::vector<graph::ParamSpec> import_option_params(const std::string& default_units = "auto");
-ImportOptions import_options_from(const graph::Params& params);
 
 // Brings `motion`, read in its file's units and axes (lengths in file units, file_to_world
 // identity, angles already radians), to skeleton.hpp's conventions, in place:

@@ -10,7 +10,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
 #include "kg/motion/skeleton.hpp"
 
 namespace kg::motion {
@@ -35,6 +34,3 @@ struct Motion {
 Motion frame_range(const Motion& motion, int first, int last = -1);
 
 }  // namespace kg::motion
-
-KG_DECLARE_TYPE(kg::motion::Skeleton, "kg.Skeleton")
-KG_DECLARE_TYPE(kg::motion::Motion, "kg.Motion")

@@ -84,4 +84,17 @@ class Skeleton {
   int channel_count_ = 0;
 };
 
+// A point fixed on a segment: `local` in `joint`'s frame (metres) of character `character`
+// (0 for the only or first character, 1 for the second of a two-character problem).
+struct PointRef {
+  int character = 0;
+  int joint = -1;
+  Eigen::Vector3d local = Eigen::Vector3d::Zero();
+};
+
+// The joint name of `skeleton` nearest to a misspelt `name`, for messages: the shortest name
+// starting with it (case-insensitive: "LeftToe" -> "LeftToeBase"), else the shortest containing
+// it, else the nearest by edit distance; "" when none is close.
+std::string nearest_joint_name(const Skeleton& skeleton, const std::string& name);
+
 }  // namespace kg::motion

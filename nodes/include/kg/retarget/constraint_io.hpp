@@ -40,7 +40,6 @@
 #include <string>
 #include <vector>
 
-#include "kg/graph/node.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
@@ -50,7 +49,7 @@ namespace kg::retarget {
 inline constexpr int kConstraintFormatVersion = 1;
 
 // `characters[c]` is character c's motion (its skeleton resolves joint names, its frame count
-// bounds frames, the first one's fps turns times into frames). Throws graph::Error with
+// bounds frames, the first one's fps turns times into frames). Throws kg::Error with
 // file:line:column. Built-in kinds are checked (ConstraintKind::check); others pass through.
 ConstraintSet read_constraints_file(const std::string& path, std::span<const motion::Motion> characters);
 ConstraintSet read_constraints_string(const std::string& text, const std::string& file_name,
@@ -59,11 +58,6 @@ ConstraintSet read_constraints_string(const std::string& text, const std::string
 // One parameter_range constraint per channel of `skeleton` with a finite limit (Channel::min or
 // max), sampled at every frame 0..frames-1, labelled "limit Joint.Channel", on `character`.
 ConstraintSet joint_limit_constraints(const motion::Skeleton& skeleton, int character, int frames);
-
-// The joint name of `skeleton` nearest to a misspelt `name`, for messages: the shortest name
-// starting with it (case-insensitive: "LeftToe" -> "LeftToeBase"), else the shortest containing
-// it, else the nearest by edit distance; "" when none is close.
-std::string nearest_joint_name(const motion::Skeleton& skeleton, const std::string& name);
 
 // Appends `more`'s constraints to `into`.
 void merge_constraints(ConstraintSet& into, const ConstraintSet& more);

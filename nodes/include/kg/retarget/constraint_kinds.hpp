@@ -44,8 +44,6 @@
 
 #include <Eigen/Geometry>
 
-#include "kg/graph/node.hpp"
-#include "kg/graph/registry.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraints.hpp"
 
@@ -81,15 +79,9 @@ using ConstraintKindLookup = std::function<std::shared_ptr<const void>(const std
 // for the first constraint whose kind is found nowhere, or when an extension's name() differs from
 // the name it was registered under.
 ConstraintKindTable kinds_for(const ConstraintSet& set, const ConstraintKindLookup& lookup);
-ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::RunContext& ctx);
-ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::Registry& registry);
 
 // Calls kind->check on every constraint (kinds must all be in `kinds`, else as kinds_for throws).
 void check_constraints(const ConstraintSet& set, const ConstraintKindTable& kinds);
-
-// The built-in kinds as registry extensions (interface kConstraintKindInterface), so that a
-// registry lists and hands them out like plugin kinds.
-std::vector<graph::Extension> builtin_constraint_kind_extensions();
 
 // How far a residual row is from holding: |r| for an equality row, max(0, -r) for an inequality.
 inline double row_violation(double residual, bool inequality) {

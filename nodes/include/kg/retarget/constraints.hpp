@@ -22,17 +22,11 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
+#include "kg/motion/skeleton.hpp"
 
 namespace kg::retarget {
 
-// A point fixed on a segment: `local` in `joint`'s frame (metres) of character `character`
-// (0 for the only or first character, 1 for the second of a two-character problem).
-struct PointRef {
-  int character = 0;
-  int joint = -1;
-  Eigen::Vector3d local = Eigen::Vector3d::Zero();
-};
+using motion::PointRef;  // kg/motion/skeleton.hpp
 
 // One frame channel of a character (for parameter constraints such as joint limits).
 struct ChannelRef {
@@ -116,5 +110,3 @@ class ConstraintKind {
 inline constexpr const char* kConstraintKindInterface = "kg.ConstraintKind";
 
 }  // namespace kg::retarget
-
-KG_DECLARE_TYPE(kg::retarget::ConstraintSet, "kg.Constraints")

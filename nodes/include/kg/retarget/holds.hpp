@@ -23,7 +23,7 @@
 namespace kg::retarget {
 
 struct HoldOptions {
-  // Points by the syntax of FootplantOptions::points ("lHand", "lHand/end", "lHand[0 -0.08 0]")
+  // Points by the syntax of motion::FootplantOptions::points ("lHand", "lHand/end", "lHand[0 -0.08 0]")
   // on character 0 (points_a) and character 1 (points_b); every pair is tried.
   std::vector<std::string> points_a{};
   std::vector<std::string> points_b{};
@@ -40,7 +40,7 @@ struct HoldSpan {
 };
 
 struct HoldDetection {
-  std::vector<PlantPoint> points_a, points_b;  // PointRef::character 0 and 1
+  std::vector<motion::PlantPoint> points_a, points_b;  // PointRef::character 0 and 1
   std::vector<HoldSpan> holds;                     // by pair, then time
   double closest = 0;                          // m, the smallest distance of any pair at any frame
 };

@@ -41,7 +41,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
 #include "kg/motion/motion.hpp"
 
 namespace kg::retarget {
@@ -111,5 +110,3 @@ KeySpacing choose_key_spacing(const motion::Motion& motion, const KeySpacingOpti
                               std::vector<KeyGroupChoice>* details = nullptr);
 
 }  // namespace kg::retarget
-
-KG_DECLARE_TYPE(kg::retarget::KeySpacing, "kg.KeySpacing")

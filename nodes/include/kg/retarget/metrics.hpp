@@ -56,7 +56,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/node.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"

@@ -35,7 +35,6 @@
 
 #include <string>
 
-#include "kg/graph/node.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraints.hpp"
 #include "kg/retarget/spacetime.hpp"
@@ -66,8 +65,5 @@ struct PerFrameIkResult {
 // unreachable constraint is not an error: it is counted in frames_unmet.
 PerFrameIkResult solve_per_frame_ik(const motion::Motion& initial, const ConstraintSet& set,
                                     const KindFinder& kinds, const PerFrameIkOptions& options = {});
-
-// The node `retarget.per_frame_ik` (also listed by retarget_metrics_node_types, metrics.hpp).
-graph::NodeType per_frame_ik_node_type();
 
 }  // namespace kg::retarget

@@ -44,9 +44,8 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/node.hpp"
 #include "kg/motion/motion.hpp"
-#include "kg/retarget/bspline.hpp"
+#include "kg/retarget/displacement.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
 
@@ -128,28 +127,6 @@ struct SpacetimeResult {
   std::vector<std::vector<int>> frames_per_key;  // per character, of the last pass
   double worst_violation() const;
   bool converged() const { return status == SpacetimeStatus::Converged; }
-};
-
-// Dense banded Cholesky of a symmetric positive definite n x n matrix of half-bandwidth b, the
-// solver's linear algebra (public for the benchmark that compares it with sparse Cholesky).
-// Lower band stored by rows: row i holds A(i, i - b .. i), the diagonal last, so the inner
-// products run over contiguous memory. Cost n b^2 / 2 multiply-adds, storage n (b + 1).
-class BandedCholesky {
- public:
-  // An n x n zero matrix of half-bandwidth b (0 <= b < n, or n == 0).
-  void reset(int n, int b);
-  int size() const { return n_; }
-  int bandwidth() const { return b_; }
-  // Entry (i, j) of the lower band: i >= j, i - j <= bandwidth().
-  double& at(int i, int j) { return data_[static_cast<std::size_t>(i) * (b_ + 1) + (j - i + b_)]; }
-  // In place A = L L^T; false when A is not positive definite.
-  bool factor();
-  // After factor(): solves A y = rhs, y holding rhs on entry.
-  void solve(Eigen::VectorXd& y) const;
-
- private:
-  int n_ = 0, b_ = 0;
-  std::vector<double> data_;
 };
 
 // Solves. Throws std::invalid_argument (naming the constraint's label where there is one) for a

@@ -38,8 +38,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/node.hpp"
-#include "kg/graph/value.hpp"
 #include "kg/motion/skeleton.hpp"
 #include "kg/retarget/constraints.hpp"
 
@@ -116,12 +114,12 @@ struct LoadedTarget {
 };
 
 // A target YAML text (the format above); `path` names the file in messages (file:line:col).
-// Throws kg::graph::Error.
+// Throws kg::Error.
 LoadedTarget parse_target_yaml(std::shared_ptr<const motion::Skeleton> source, std::string_view text,
                                const std::string& path);
 // By extension (case-insensitive): .yaml/.yml (parse_target_yaml), .bvh (kg::io::import_bvh,
 // units and up auto) or .asf (kg::io::read_asf, its declared units) as a skeleton_target.
-// Throws kg::graph::Error for an unreadable or malformed file, std::invalid_argument for another
+// Throws kg::Error for an unreadable or malformed file, std::invalid_argument for another
 // structure or an unknown extension.
 LoadedTarget load_target(std::shared_ptr<const motion::Skeleton> source, const std::string& path);
 
@@ -142,6 +140,3 @@ ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Targ
                                     double fps = 0);
 
 }  // namespace kg::retarget
-
-KG_DECLARE_TYPE(kg::retarget::Target, "kg.Target")
-

@@ -25,7 +25,7 @@
 //     heel - w/2 side; the heel pair is fixed on the foot segment, the tip pair on the toe segment
 //     (on the foot when it has no toe child), so toes bending at push-off carry the tip vertices.
 // The heel pair touches while the heel point (heel centre) is planted, the tip pair while the toe
-// tip is planted, as kg::retarget::detect_footplants finds them (near the floor and slow); a foot
+// tip is planted, as kg::motion::detect_footplants finds them (near the floor and slow); a foot
 // touches while either pair does. A frame left without contact whose root is held up (a landing's
 // impact, a takeoff's last push: support_acceleration) lets a pair near the floor touch however
 // fast it moves.
@@ -41,10 +41,9 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/motion.hpp"
-#include "kg/retarget/footplants.hpp"
+#include "kg/motion/footplants.hpp"
 
 namespace kg::retime {
 
@@ -102,7 +101,7 @@ Contacts assemble_contacts(const motion::Motion& motion, std::vector<ContactPatc
 
 struct FootContactOptions {
   // Foot joints by name (the ankle's segment: "lfoot", "LeftFoot"); empty: the feet
-  // kg::retarget::detect_footplants finds by common names.
+  // kg::motion::detect_footplants finds by common names.
   std::vector<std::string> feet{};
   double heel_ratio = 0.25;   // heel behind the ankle, as a fraction of the ankle-to-tip distance (>= 0)
   double width_ratio = 0.36;  // foot width as a fraction of the foot's length (> 0)
@@ -118,8 +117,8 @@ struct FootContactOptions {
   // and admit faster points than footplants do (0.3 m/s: a heel strikes at a few dm/s; at 0.15 m/s
   // CMU 16_15 loses half its double supports). A given floor (plants.floor) is where the heel and
   // tip points rest (rest_on_floor).
-  retarget::FootplantOptions plants = [] {
-    retarget::FootplantOptions o;
+  motion::FootplantOptions plants = [] {
+    motion::FootplantOptions o;
     o.rest_on_floor = true;
     o.trim_distance = 0.0;
     o.speed_threshold = 0.3;
@@ -163,7 +162,7 @@ Contacts detect_contacts(const motion::Motion& motion, const FootContactOptions&
 // out of the clip, an unknown key with the nearest allowed one.
 inline constexpr int kContactFormatVersion = 1;
 
-// Throws kg::graph::Error with file:line:column.
+// Throws kg::Error with file:line:column.
 Contacts read_contacts_file(const std::string& path, const motion::Motion& motion);
 Contacts read_contacts_string(const std::string& text, const std::string& file_name,
                               const motion::Motion& motion);
@@ -181,5 +180,3 @@ Eigen::Matrix<double, 3, 4> friction_basis(double mu);
 void contact_generalised_forces(const ContactFrame& frame, int channel_count, double mu, Eigen::MatrixXd& N);
 
 }  // namespace kg::retime
-
-KG_DECLARE_TYPE(kg::retime::Contacts, "kg.Contacts")

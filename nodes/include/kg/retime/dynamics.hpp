@@ -33,11 +33,11 @@
 
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/motion.hpp"
-#include "kg/retime/body_model.hpp"
+#include "kg/body/body_model.hpp"
 #include "kg/retime/path.hpp"
 #include "kg/retime/path_torques.hpp"
 #include "kg/retime/polynomial.hpp"
-#include "kg/retime/rnea.hpp"
+#include "kg/body/rnea.hpp"
 
 namespace kg::retime {
 
@@ -78,13 +78,13 @@ using PathMassForce =
 // Buffers of every function below, sized for one skeleton at a time (reusable across skeletons;
 // it regrows). Its contents are scratch: nothing in it is meaningful between calls.
 struct DynamicsWorkspace {
-  DynamicsTopology topology;
-  FrameKinematics kinematics;
-  RneaBuffers<double, double, double> numeric;
-  RneaBuffers<PathVelocity, PathAcceleration, PathAcceleration> path;
-  RneaBuffers<PathVelocity, PathAcceleration, PathMassForce> path_mass;
-  std::vector<Spatial<double>> external;  // per joint
-  std::vector<SpatialInertia> composite;  // per joint
+  body::DynamicsTopology topology;
+  body::FrameKinematics kinematics;
+  body::RneaBuffers<double, double, double> numeric;
+  body::RneaBuffers<PathVelocity, PathAcceleration, PathAcceleration> path;
+  body::RneaBuffers<PathVelocity, PathAcceleration, PathMassForce> path_mass;
+  std::vector<body::Spatial<double>> external;  // per joint
+  std::vector<body::SpatialInertia> composite;  // per joint
 };
 
 // A force the environment applies to one segment.
@@ -98,28 +98,28 @@ struct ExternalForce {
 // τ (channel_count) that moves the figure through q (frame values: metres, radians), q̇ and q̈
 // (channel_count each, per second and per second²) under `gravity` (world, m/s²) with `external`
 // forces acting on it.
-void inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
+void inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
                       const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
                       DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau);
 // The same, allocating its result.
-Eigen::VectorXd inverse_dynamics(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+Eigen::VectorXd inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                                  motion::FrameRef qdd, const Eigen::Vector3d& gravity,
                                  std::span<const ExternalForce> external = {});
 
 // The joint-space mass matrix M(q) (channel_count x channel_count, symmetric) by the composite
 // rigid body algorithm, independently of the recursion above.
-void mass_matrix(const BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
+void mass_matrix(const body::BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
                  Eigen::Ref<Eigen::MatrixXd> M);
 // C(q, q̇) q̇ + G(q): τ at zero acceleration and no external force (channel_count).
-void bias_forces(const BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
+void bias_forces(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
                  const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias);
 
 // τ(ṗ², p̈, g) at source frame `frame` of `clip` (whose skeleton has body's channels), with q', q''
 // from `d` = path_derivatives(clip): velocity = M q'' + C(q, q') q', acceleration = M q', gravity =
 // ∂τ/∂g (path_torques.hpp). `out`'s storage is reused (no allocation once sized).
-void frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
+void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
                    DynamicsWorkspace& ws, FrameTorques& out);
-FrameTorques frame_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+FrameTorques frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                            int frame, DynamicsWorkspace& ws);
 
 // τ when one segment's mass and inertia are multiplied by k: τ(k) = base + (k − 1) change, exactly
@@ -134,9 +134,9 @@ struct MassScaleTorques {
   }
 };
 // `joint`: the segment scaled (0..joint_count-1).
-void frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                               int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out);
-MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::Motion& clip,
+MassScaleTorques frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip,
                                           const PathDerivatives& d, int frame, int joint,
                                           DynamicsWorkspace& ws);
 
@@ -144,7 +144,7 @@ MassScaleTorques frame_torques_mass_scale(const BodyModel& body, const motion::M
 // path_derivatives(clip)) in frames; with `segment` >= 0 (a joint index) also that segment's name
 // and, per frame, the change of τ per unit of its mass scale (frame_torques_mass_scale's change).
 // skeleton and fps are the clip's.
-PathTorques path_torques(const BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+PathTorques path_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                          int segment = -1);
 
 }  // namespace kg::retime

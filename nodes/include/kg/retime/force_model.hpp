@@ -32,6 +32,7 @@
 
 #include <Eigen/Core>
 
+#include "kg/numerics/convex_nearest.hpp"
 #include "kg/retime/hulls.hpp"
 #include "kg/retime/path_torques.hpp"
 
@@ -72,11 +73,7 @@ std::vector<PatchForce> patch_forces(const FrameHull& hull, const Eigen::VectorX
 // The point of the hull nearest to x (plane units) and its squared distance (0 inside). `hint` as
 // in find_sector: with it the search starts at x's sector and walks along the boundary from the
 // edge that sector faces until the nearest point is certified (the answer does not depend on it).
-struct HullPoint {
-  Eigen::Vector2d point = Eigen::Vector2d::Zero();
-  double distance_squared = 0;
-  bool inside = true;
-};
+using HullPoint = numerics::NearestPoint;
 HullPoint closest_point(const FrameHull& hull, const Eigen::Vector2d& x, int& hint);
 
 // The same for a convex polygon given by its vertices (counter-clockwise; 1 is a point, 2 a

@@ -22,7 +22,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
 #include "kg/motion/skeleton.hpp"
 
 namespace kg::retime {
@@ -61,5 +60,3 @@ struct PathTorques {
 };
 
 }  // namespace kg::retime
-
-KG_DECLARE_TYPE(kg::retime::PathTorques, "kg.PathTorques")

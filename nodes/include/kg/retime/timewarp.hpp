@@ -20,7 +20,6 @@
 
 #include <Eigen/Core>
 
-#include "kg/graph/value.hpp"
 
 namespace kg::retime {
 
@@ -91,5 +90,3 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
 TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments);
 
 }  // namespace kg::retime
-
-KG_DECLARE_TYPE(kg::retime::TimeWarp, "kg.TimeWarp")

@@ -67,7 +67,7 @@
 
 #include <Eigen/Core>
 
-#include "kg/retime/body_model.hpp"
+#include "kg/body/body_model.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/hulls.hpp"
 #include "kg/retime/path_torques.hpp"
@@ -113,7 +113,7 @@ struct ObservedFrame {
 };
 
 struct TorqueLimitEstimate {
-  BodyModel body;  // the input body with torque_min / torque_max set as above
+  body::BodyModel body;  // the input body with torque_min / torque_max set as above
   // Per channel (channel_count): the largest |τ| observed over every clip (N m, N on position
   // channels; 0 where unobserved or unactuated), and where: clip index and frame, -1 if none.
   Eigen::VectorXd peak{};
@@ -131,16 +131,16 @@ struct TorqueLimitEstimate {
 // The limits above for `body` from the clips (at least one). Throws std::invalid_argument for no
 // clip, a clip without contacts, frame or channel counts that disagree, a bad body
 // (check_body_model), margin <= 0, a negative floor or either not finite, bad hull options.
-TorqueLimitEstimate estimate_torque_limits(const BodyModel& body, std::span<const ClipLoads> clips,
+TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::span<const ClipLoads> clips,
                                            const TorqueLimitOptions& options = {});
 // One clip.
-TorqueLimitEstimate estimate_torque_limits(const BodyModel& body, const Contacts& contacts,
+TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, const Contacts& contacts,
                                            std::span<const FrameTorques> torques,
                                            const TorqueLimitOptions& options = {});
 
 // `body` with the channels estimate_torque_limits would estimate (per `position_channels`) set to
 // ±infinity, the others as they are: the body of the unlimited hulls.
-BodyModel without_torque_limits(const BodyModel& body, bool position_channels = false);
+body::BodyModel without_torque_limits(const body::BodyModel& body, bool position_channels = false);
 
 // Pairs of mirrored joints (indices, each joint in at most one pair) by the name rules above.
 std::vector<std::pair<int, int>> mirrored_joints(const motion::Skeleton& skeleton);

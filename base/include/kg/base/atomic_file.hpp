@@ -1,0 +1,48 @@
+// Files of a run: inputs are read through read_input_file, outputs written through
+// write_file_atomically, so that readers see either the old content or the whole new content of
+// an output, never a part (data goes to a temporary file beside the target, is flushed, then
+// renamed over it), and no output ever replaces a file the process has read as an input (the
+// graph file, a clip, a skeleton found by guessing, ...), whatever path leads to it.
+//
+//   std::string text = read_input_file("walk.bvh", "BVH file");
+//   write_file_atomically("out/walk.bvh", [&](std::ostream& os) { write_bvh(os, motion); });
+#pragma once
+
+#include <filesystem>
+#include <functional>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace kg {
+
+// The whole content of `path`, which from now on this process refuses to overwrite. Throws Error
+// located at the file: "no such <what>", "<what> expected, got a directory", "cannot open <what>".
+std::string read_input_file(const std::filesystem::path& path, const std::string& what);
+
+// Whether `path` names a file read through read_input_file (by any path leading to it).
+bool is_input_file(const std::filesystem::path& path);
+
+// Creates missing parent directories. Refuses (std::runtime_error naming the path) a target that
+// is an input file. If `write` throws or the stream fails, the temporary file is removed, the
+// target is untouched, and the error propagates (std::runtime_error naming the path).
+void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write);
+
+// Removes the temporary file of every write_file_atomically call still in progress in this process,
+// without locks or allocation, so a SIGINT/SIGTERM handler may call it: an interrupted process
+// leaves no partial output beside its targets.
+void remove_pending_temporaries() noexcept;
+
+// The targets write_file_atomically has completed in this process, in order (a batch runs each
+// item in its own process, so these are the item's outputs).
+std::vector<std::filesystem::path> written_files();
+
+// Removes the targets write_file_atomically has completed in this process (the first 256), without
+// locks or allocation, for a signal handler of a process doing one unit of work: interrupted, it
+// leaves none of that work's outputs.
+void remove_written_files() noexcept;
+
+// The files read through read_input_file in this process, by canonical path, sorted.
+std::vector<std::filesystem::path> input_files_read();
+
+}  // namespace kg

@@ -1,0 +1,203 @@
+#include "kg/base/atomic_file.hpp"
+
+#include "kg/base/error.hpp"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cerrno>
+#include <cstring>
+#include <exception>
+#include <fstream>
+#include <mutex>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <system_error>
+
+namespace kg {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+// Every input file read by this process, by canonical path (and (device, inode) through
+// fs::equivalent when comparing), guarded for readers on several threads.
+struct InputFiles {
+  std::mutex mutex;
+  std::set<fs::path> paths;
+};
+InputFiles& input_files() {
+  static InputFiles files;
+  return files;
+}
+
+// Unique within the machine for this process's lifetime: several threads or processes may write
+// beside the same target at once.
+fs::path temporary_beside(const fs::path& target) {
+  static std::atomic<unsigned long> counter{0};
+  std::string name = ".";
+  name += target.filename().string();
+  name += ".tmp.";
+  name += std::to_string(::getpid());
+  name += '.';
+  name += std::to_string(counter.fetch_add(1));
+  return target.parent_path() / name;
+}
+
+// The temporaries being written, for remove_pending_temporaries in a signal handler: fixed slots,
+// each free (0), being claimed (1) or holding a path (2). A write finding no free slot is not
+// tracked, which only matters if the process is interrupted during it.
+struct PendingSlot {
+  std::atomic<int> state{0};
+  char path[4096];
+};
+std::array<PendingSlot, 64> pending_slots;
+// The same for targets written, once renamed into place.
+std::array<PendingSlot, 256> written_slots;
+
+template <std::size_t N>
+PendingSlot* track(std::array<PendingSlot, N>& slots, const fs::path& file) {
+  const std::string& text = file.native();
+  if (text.size() >= sizeof(PendingSlot::path)) return nullptr;
+  for (PendingSlot& slot : slots) {
+    int expected = 0;
+    if (!slot.state.compare_exchange_strong(expected, 1)) continue;
+    std::memcpy(slot.path, text.c_str(), text.size() + 1);
+    slot.state.store(2);
+    return &slot;
+  }
+  return nullptr;
+}
+
+// Lock- and allocation-free: called from signal handlers.
+template <std::size_t N>
+void unlink_tracked(std::array<PendingSlot, N>& slots) noexcept {
+  for (PendingSlot& slot : slots) {
+    if (slot.state.load() == 2) ::unlink(slot.path);
+  }
+}
+
+struct WrittenFiles {
+  std::mutex mutex;
+  std::vector<fs::path> paths;
+};
+WrittenFiles& written() {
+  static WrittenFiles files;
+  return files;
+}
+
+void remove_quietly(const fs::path& p) {
+  std::error_code ec;
+  fs::remove(p, ec);
+}
+
+}  // namespace
+
+std::string read_input_file(const fs::path& path, const std::string& what) {
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw Error("no such " + what, {path.string()});
+  if (fs::is_directory(path, ec)) throw Error(what + " expected, got a directory", {path.string()});
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
+  std::ostringstream text;
+  text << in.rdbuf();
+  if (in.bad()) throw Error("cannot read " + what, {path.string()});
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  files.paths.insert(ec ? path : canonical);
+  return std::move(text).str();
+}
+
+bool is_input_file(const fs::path& path) {
+  std::error_code ec;
+  const fs::path canonical = fs::weakly_canonical(path, ec);
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  if (files.paths.count(ec ? path : canonical)) return true;
+  for (const fs::path& input : files.paths)  // hard links and other spellings of one file
+    if (fs::equivalent(input, path, ec)) return true;
+  return false;
+}
+
+void write_file_atomically(const fs::path& target, const std::function<void(std::ostream&)>& write) {
+  const std::string what = "cannot write '" + target.string() + "'";
+  if (target.empty() || !target.has_filename()) throw std::runtime_error(what + ": not a file name");
+  if (is_input_file(target))
+    throw std::runtime_error(what + ": it is an input of this run and is never overwritten");
+
+  std::error_code ec;
+  if (target.has_parent_path()) {
+    fs::create_directories(target.parent_path(), ec);
+    if (ec)
+      throw std::runtime_error(what + ": cannot create directory '" + target.parent_path().string() +
+                               "': " + ec.message());
+  }
+  if (fs::is_directory(target, ec)) throw std::runtime_error(what + ": it is a directory");
+
+  const fs::path temp = temporary_beside(target);
+  PendingSlot* const pending = track(pending_slots, temp);
+  struct Untrack {
+    PendingSlot* slot;
+    ~Untrack() {
+      if (slot) slot->state.store(0);
+    }
+  } untrack{pending};
+  try {
+    std::ofstream os(temp, std::ios::binary | std::ios::trunc);
+    if (!os) throw std::runtime_error(what + ": cannot create temporary file '" + temp.string() + "'");
+    try {
+      write(os);
+    } catch (const std::exception& e) {
+      os.close();
+      remove_quietly(temp);
+      std::throw_with_nested(std::runtime_error(what + ": " + e.what()));
+    } catch (...) {
+      os.close();
+      remove_quietly(temp);
+      std::throw_with_nested(std::runtime_error(what + ": unknown error"));
+    }
+    os.flush();
+    if (!os) throw std::runtime_error(what + ": write error (disk full?)");
+    os.close();
+    if (os.fail()) throw std::runtime_error(what + ": error closing the temporary file");
+
+    // Keep the permissions of a file being replaced.
+    if (fs::exists(target, ec)) {
+      const auto perms = fs::status(target, ec).permissions();
+      if (!ec) fs::permissions(temp, perms, ec);
+    }
+    fs::rename(temp, target, ec);
+    if (ec) throw std::runtime_error(what + ": rename from '" + temp.string() + "' failed: " + ec.message());
+  } catch (...) {
+    remove_quietly(temp);
+    throw;
+  }
+  WrittenFiles& files = written();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  const bool again = std::find(files.paths.begin(), files.paths.end(), target) != files.paths.end();
+  if (!again) track(written_slots, fs::absolute(target, ec));
+  files.paths.push_back(target);
+}
+
+void remove_written_files() noexcept { unlink_tracked(written_slots); }
+
+std::vector<fs::path> input_files_read() {
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  return {files.paths.begin(), files.paths.end()};
+}
+
+void remove_pending_temporaries() noexcept { unlink_tracked(pending_slots); }
+
+std::vector<fs::path> written_files() {
+  WrittenFiles& files = written();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  return files.paths;
+}
+
+}  // namespace kg

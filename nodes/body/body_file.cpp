@@ -1,0 +1,234 @@
+// Body files: the YAML of body_build.hpp (table, mass, classes, overrides, torque limits,
+// friction, gravity), every error located at file:line:column.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <regex>
+#include <sstream>
+
+#include <yaml-cpp/yaml.h>
+
+#include "kg/base/atomic_file.hpp"
+#include "kg/base/error.hpp"
+#include "kg/base/yaml_reader.hpp"
+#include "kg/body/body_build.hpp"
+
+namespace kg::body {
+
+namespace {
+
+using kg::Error;
+using kg::SourceLocation;
+
+std::string in_quotes(const std::string& s) {
+  return "'" + s + "'";
+}
+
+std::string join(const std::vector<std::string>& names) {
+  std::string out;
+  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
+  return out;
+}
+
+std::string fmt(double v) {
+  std::ostringstream s;
+  s << v;
+  return s.str();
+}
+
+class Reader : public kg::YamlReader {
+ public:
+  explicit Reader(std::string path) : YamlReader(std::move(path)) {}
+
+
+  std::vector<double> numbers(const YAML::Node& n, const std::string& what, bool allow_inf = false) const {
+    if (!n.IsSequence()) fail(what + ": expected a list of numbers", n);
+    std::vector<double> out;
+    for (std::size_t i = 0; i < n.size(); ++i)
+      out.push_back(number(n[i], what + "[" + std::to_string(i) + "]", allow_inf));
+    return out;
+  }
+  Eigen::Vector3d vector3(const YAML::Node& n, const std::string& what) const {
+    const std::vector<double> v = numbers(n, what);
+    if (v.size() != 3) fail(what + ": expected 3 numbers [x, y, z], got " + std::to_string(v.size()), n);
+    return {v[0], v[1], v[2]};
+  }
+  void check_regex(const Entry& e, const std::string& what) const {
+    try {
+      std::regex re(e.key, std::regex::ECMAScript);
+    } catch (const std::regex_error& err) {
+      fail("bad regular expression " + in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+    }
+  }
+
+  // [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] or three rows of three.
+  Eigen::Matrix3d inertia(const YAML::Node& n, const std::string& what) const {
+    if (!n.IsSequence())
+      fail(what + ": expected [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] or 3 rows of 3", n);
+    Eigen::Matrix3d I = Eigen::Matrix3d::Zero();
+    if (n.size() == 3 && n[0].IsSequence()) {
+      for (int r = 0; r < 3; ++r) {
+        const Eigen::Vector3d row =
+            vector3(n[static_cast<std::size_t>(r)], what + "[" + std::to_string(r) + "]");
+        I.row(r) = row.transpose();
+      }
+    } else {
+      const std::vector<double> v = numbers(n, what);
+      if (v.size() != 3 && v.size() != 6)
+        fail(what + ": expected 3 numbers (principal moments) or 6 (Ixx, Iyy, Izz, Ixy, Ixz, Iyz), got " +
+                 std::to_string(v.size()),
+             n);
+      I.diagonal() << v[0], v[1], v[2];
+      if (v.size() == 6) {
+        I(0, 1) = I(1, 0) = v[3];
+        I(0, 2) = I(2, 0) = v[4];
+        I(1, 2) = I(2, 1) = v[5];
+      }
+    }
+    try {
+      check_segment_inertia(I, what);  // the builder's own check, located here
+    } catch (const std::invalid_argument& e) {
+      fail(e.what(), n);
+    }
+    return I;
+  }
+
+  LoadedBodySpec read(std::string_view text, const BodySpec& base) const {
+    const YAML::Node root = load(text, "empty body file (expected at least version: 1)");
+    const std::vector<Entry> top = entries(root, "the body file");
+    check_keys(
+        top, "the body file",
+        {"version", "table", "mass", "radii", "classes", "segments", "torque_limits", "friction", "gravity"});
+    check_version(top);
+
+    LoadedBodySpec out{base, {}};
+    BodySpec& spec = out.spec;
+    const Entry* mass = nullptr;
+    for (const Entry& e : top) {
+      if (e.key == "version") continue;
+      out.given.push_back(e.key);
+      if (e.key == "table") {
+        if (!e.value.IsScalar()) fail("table: expected one of " + join(body_table_names()), e.value);
+        const auto t = body_table_from_string(e.value.Scalar());
+        if (!t) {
+          const std::string near = kg::nearest_name(e.value.Scalar(), body_table_names());
+          fail("table: unknown table " + in_quotes(e.value.Scalar()) +
+                   (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
+                   join(body_table_names()),
+               e.value);
+        }
+        spec.table = *t;
+      } else if (e.key == "mass") {
+        spec.mass = non_negative(e.value, "mass");
+        mass = &e;
+      } else if (e.key == "radii") {
+        for (const Entry& r : entries(e.value, "radii")) {
+          const auto c = segment_class_from_string(r.key);
+          if (!c || *c == SegmentClass::Massless) {
+            std::vector<std::string> names = segment_class_names();
+            names.pop_back();  // massless has no radius
+            const std::string near = kg::nearest_name(r.key, names);
+            fail("unknown class " + in_quotes(r.key) + " in radii" +
+                     (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
+                     "; allowed: " + join(names),
+                 r.key_node);
+          }
+          spec.radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, "radii." + r.key);
+        }
+      } else if (e.key == "classes") {
+        spec.classes.clear();
+        for (const Entry& c : entries(e.value, "classes")) {
+          check_regex(c, "classes");
+          if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
+            const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
+            const std::string near = kg::nearest_name(got, segment_class_names());
+            fail("classes." + c.key + ": unknown class " + in_quotes(got) +
+                     (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
+                     join(segment_class_names()),
+                 c.value);
+          }
+          spec.classes.push_back({c.key, *segment_class_from_string(c.value.Scalar()), at(c.key_node)});
+        }
+      } else if (e.key == "segments") {
+        spec.segments.clear();
+        for (const Entry& s : entries(e.value, "segments")) {
+          check_regex(s, "segments");
+          const std::string what = "segments." + s.key;
+          const std::vector<Entry> fields = entries(s.value, what);
+          check_keys(fields, what, {"mass", "mass_scale", "com", "inertia", "radius"});
+          if (fields.empty())
+            fail(what + ": expected at least one of mass, mass_scale, com, inertia, radius", s.value);
+          SegmentOverride o{.pattern = s.key, .where = at(s.key_node)};
+          for (const Entry& f : fields) {
+            const std::string fw = what + "." + f.key;
+            if (f.key == "mass") o.mass = positive(f.value, fw);
+            if (f.key == "mass_scale") o.mass_scale = positive(f.value, fw);
+            if (f.key == "radius") o.radius = positive(f.value, fw);
+            if (f.key == "com") o.com = vector3(f.value, fw);
+            if (f.key == "inertia") o.inertia = inertia(f.value, fw);
+            if (o.mass && o.mass_scale) fail(what + ": give mass or mass_scale, not both", f.key_node);
+          }
+          spec.segments.push_back(std::move(o));
+        }
+      } else if (e.key == "torque_limits") {
+        spec.torque_limits.clear();
+        for (const Entry& t : entries(e.value, "torque_limits")) {
+          check_regex(t, "torque_limits");
+          const std::string what = "torque_limits." + t.key;
+          TorqueLimit limit{.pattern = t.key, .values = {}, .where = at(t.key_node)};
+          if (t.value.IsSequence()) {
+            limit.values = numbers(t.value, what, true);
+            if (limit.values.empty())
+              fail(what + ": expected one bound per channel, got an empty list", t.value);
+            for (std::size_t i = 0; i < limit.values.size(); ++i)
+              if (!(limit.values[i] > 0))
+                fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " +
+                         fmt(limit.values[i]),
+                     t.value[i]);
+          } else {
+            const double v = number(t.value, what, true);
+            if (!(v > 0)) fail(what + ": expected N m > 0 (or .inf), got " + fmt(v), t.value);
+            limit.values = {v};
+          }
+          spec.torque_limits.push_back(std::move(limit));
+        }
+      } else if (e.key == "friction") {
+        spec.friction = non_negative(e.value, "friction");
+      } else if (e.key == "gravity") {
+        if (e.value.IsSequence()) {
+          spec.gravity = vector3(e.value, "gravity");
+        } else {
+          if (!e.value.IsScalar())
+            fail("gravity: expected m/s² (straight down) or a vector [x, y, z]", e.value);
+          const double g = number(e.value, "gravity");
+          if (g < 0)
+            fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " +
+                     fmt(g),
+                 e.value);
+          spec.gravity = Eigen::Vector3d(0, -g, 0);
+        }
+      }
+    }
+    if (spec.table != BodyTable::Cylinders && !(spec.mass > 0)) {
+      const std::string msg = "mass " + fmt(spec.mass) + " kg with table " + to_string(spec.table) +
+                              ": expected > 0 (0 means 'from the volumes' only with cylinders)";
+      if (mass != nullptr) fail(msg, mass->value);
+      throw Error(msg, {path(), 1, 1});
+    }
+    return out;
+  }
+
+ private:
+};
+
+}  // namespace
+
+LoadedBodySpec parse_body_yaml(std::string_view text, const std::string& path, const BodySpec& base) {
+  return Reader(path).read(text, base);
+}
+
+LoadedBodySpec load_body_yaml(const std::string& path, const BodySpec& base) {
+  return parse_body_yaml(kg::read_input_file(path, "body file"), path, base);
+}
+
+}  // namespace kg::body

@@ -1,0 +1,104 @@
+// Footplant detection (Gleicher 1998 §3.5, §7.1), shared by both papers (the retargeting's plant
+// constraints, the retiming's contacts): spans of frames during which a point of a foot
+// (heel/ankle, toe) rests on the floor, found from its height and horizontal speed with
+// hysteresis.
+//
+// Detection, per point: height above the floor h(f) and horizontal speed v(f) (central
+// differences over +-k frames, k = max(1, round(fps / 60)), metres per second). A plant starts
+// where h <= height_threshold and v <= speed_threshold, and lasts while h <= height_threshold *
+// hysteresis and v <= speed_threshold * hysteresis; the span's end frames farther than
+// trim_distance from its median position are trimmed off (the roll into and out of a plant),
+// and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest level (an ankle rests 7-10 cm
+// above a toe tip): its lowest height within `rest_window_s` around the frame (captured floors
+// slope and drift by centimetres between steps), or with rest_window_s = 0 the `floor_percentile`
+// of its heights over the clip. The floor (for the constraints: above-floor regions) is given, or
+// estimated as the `floor_percentile` of the lowest point's heights.
+//
+//   FootplantDetection d = detect_footplants(walk, {});
+//   for (const Footplant& p : d.plants) use(d.points[p.point].name, p.first_frame, p.last_frame);
+#pragma once
+
+#include <limits>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "kg/motion/motion.hpp"
+#include "kg/motion/skeleton.hpp"
+
+namespace kg::motion {
+
+struct FootplantOptions {
+  // Points by joint name: "LeftToeBase" (the joint's origin), "LeftToeBase/end" (its first End
+  // Site) or "LeftFoot[0 -0.07 -0.05]" (a point in the joint's frame, metres: a heel). Empty: per foot, the ankle (foot joint origin) and the toe tip (End Site of the toe
+  // joint, else the toe joint, else the foot's End Site), by common names (LeftFoot/LeftToeBase,
+  // CMU ASF lfoot/ltoes, l_foot/l_toes, LeftAnkle/LeftToe, ...).
+  std::vector<std::string> points{};
+  double height_threshold = 0.03;  // m above the point's rest level to enter a plant
+  double speed_threshold = 0.15;   // m/s horizontal to enter a plant
+  double hysteresis = 1.5;         // leave thresholds = enter thresholds * hysteresis (>= 1)
+  double min_duration_s = 0.08;    // shorter spans are dropped
+  int min_duration_frames = 3;     // and spans of fewer frames than this
+  double floor = std::numeric_limits<double>::quiet_NaN();  // m; NaN: estimated
+  double floor_percentile = 0.05;  // in [0, 0.5]
+  // With a given floor, every point's rest level is the floor itself instead of its own low
+  // heights: for points on the sole (a foot's contact vertices), whose planted height is the
+  // floor's. Ignored when the floor is estimated.
+  bool rest_on_floor = false;
+  double trim_distance = 0.01;     // m: a plant's end frames farther than this from its median
+                                   // position are trimmed off (0: no trimming)
+  double rest_window_s = 1.0;      // s, >= 0 (0: one rest level per point for the whole clip)
+  int character = 0;               // written into the PointRefs
+};
+
+struct PlantPoint {
+  std::string name;  // "LeftToeBase/end", "LeftFoot"
+  PointRef point;
+  double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest
+                           // level), or the given floor (rest_on_floor)
+  std::vector<double> heights{};  // m, world: its height at every frame of the motion
+  // m, world: at every frame, the level its height is measured above to detect plants (its
+  // lowest height within rest_window_s around the frame, or rest_height).
+  std::vector<double> rest_levels{};
+};
+
+struct Footplant {
+  int point = 0;            // index into FootplantDetection::points
+  int first_frame = 0;      // inclusive
+  int last_frame = 0;       // inclusive
+  Eigen::Vector3d mean;     // mean world position over the plant, metres
+  double skate = 0;         // greatest horizontal distance from the first frame's position, m
+};
+
+struct FootplantDetection {
+  std::vector<PlantPoint> points;
+  std::vector<Footplant> plants;  // ordered by point, then time
+  double floor = 0;               // m, world height of the floor (given or estimated)
+  bool floor_estimated = false;   // floor was not given
+  std::vector<std::string> notes; // which points were chosen, floor estimate
+  int count(int point) const;     // plants of one point
+};
+
+// Node-parameter text for the options above: "LeftFoot, RightToeBase/end" gives the names,
+// trimmed, empty items dropped.
+std::vector<std::string> split_names(const std::string& text);
+// A `floor` parameter: "auto" or "" gives NaN (estimated), else a height in metres. Throws
+// std::invalid_argument naming the text otherwise.
+double parse_floor(const std::string& text);
+
+// A point by the syntax of FootplantOptions::points ("Joint", "Joint/end", "Joint[x y z]") on
+// `character`. Throws std::invalid_argument for an unknown joint (with the nearest name), a
+// missing End Site or a malformed offset; `who` starts the messages ("footplants").
+PlantPoint find_point(const Skeleton& skeleton, const std::string& spec, int character,
+                      const std::string& who = "footplants");
+
+// World positions (metres) of `points` at every frame of `motion`: frame_count() x points.size()
+// entries, frame-major (frame f, point i at f * points.size() + i).
+std::vector<Eigen::Vector3d> point_positions(const Motion& motion, const std::vector<PlantPoint>& points);
+
+// Throws std::invalid_argument for a named joint that does not exist (with the nearest name),
+// when no foot joint is found automatically, or for options out of range.
+FootplantDetection detect_footplants(const Motion& motion, const FootplantOptions& options);
+
+}  // namespace kg::motion

@@ -1,0 +1,282 @@
+// Footplant detection (footplants.hpp).
+#include "kg/motion/footplants.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <limits>
+#include <span>
+#include <sstream>
+#include <stdexcept>
+
+#include "kg/base/error.hpp"
+#include "kg/motion/kinematics.hpp"
+
+namespace kg::motion {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Lower-case, without a namespace prefix ("mixamorig:"), a "CC_Base_" prefix, '_', '-' and ' ',
+// so that LeftFoot, l_foot, Foot_L, CC_Base_L_Foot and lFoot compare alike.
+std::string normalised(const std::string& name) {
+  std::string n = name.substr(name.find_last_of(':') == std::string::npos ? 0 : name.find_last_of(':') + 1);
+  std::string out;
+  for (char ch : n) {
+    if (ch == '_' || ch == '-' || ch == ' ') continue;
+    out += static_cast<char>(std::tolower(static_cast<unsigned char>(ch)));
+  }
+  if (out.rfind("ccbase", 0) == 0) out = out.substr(6);
+  return out;
+}
+
+// Whether a normalised name is `side` + `part` or `part` + `side` for a side spelling and part.
+bool matches(const std::string& n, std::span<const char* const> sides, std::span<const char* const> parts) {
+  for (const char* s : sides)
+    for (const char* p : parts)
+      if (n == std::string(s) + p || n == std::string(p) + s) return true;
+  return false;
+}
+
+int find_by_role(const Skeleton& sk, bool left, bool toe) {
+  static constexpr const char* kLeft[] = {"left", "l"};
+  static constexpr const char* kRight[] = {"right", "r"};
+  static constexpr const char* kToe[] = {"toebase", "toes", "toe", "toejoint", "ball"};
+  static constexpr const char* kFoot[] = {"foot", "ankle"};
+  const std::span<const char* const> sides = left ? std::span<const char* const>(kLeft) : std::span<const char* const>(kRight);
+  const std::span<const char* const> parts = toe ? std::span<const char* const>(kToe) : std::span<const char* const>(kFoot);
+  for (int j = 0; j < sk.joint_count(); ++j)
+    if (matches(normalised(sk.joint(j).name), sides, parts)) return j;
+  return -1;
+}
+
+std::vector<PlantPoint> auto_points(const Skeleton& sk, int character, std::vector<std::string>& notes) {
+  std::vector<PlantPoint> out;
+  for (bool left : {true, false}) {
+    const int foot = find_by_role(sk, left, false);
+    const int toe = find_by_role(sk, left, true);
+    if (foot >= 0) out.push_back(find_point(sk, sk.joint(foot).name, character));
+    if (toe >= 0)
+      out.push_back(find_point(sk, sk.joint(toe).name + (sk.joint(toe).end_sites.empty() ? "" : "/end"), character));
+    else if (foot >= 0 && !sk.joint(foot).end_sites.empty())
+      out.push_back(find_point(sk, sk.joint(foot).name + "/end", character));
+  }
+  if (out.empty())
+    throw std::invalid_argument(
+        "footplants: no foot joint found by name (tried LeftFoot/RightFoot, lfoot/rfoot, l_foot, Foot_L, "
+        "LeftAnkle, ...); name the points");
+  std::string list;
+  for (const PlantPoint& p : out) list += (list.empty() ? "" : ", ") + p.name;
+  notes.push_back("points (auto): " + list);
+  return out;
+}
+
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
+}  // namespace
+
+PlantPoint find_point(const Skeleton& sk, const std::string& spec, int character, const std::string& who) {
+  std::string joint = spec;
+  bool end = false, has_offset = false;
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();
+  if (spec.size() > 4 && spec.compare(spec.size() - 4, 4, "/end") == 0) {
+    joint = spec.substr(0, spec.size() - 4);
+    end = true;
+  } else if (const auto open = spec.find('['); open != std::string::npos) {
+    // "LeftFoot[0 -0.07 -0.05]": a point in the joint's frame (a heel), metres.
+    std::istringstream in(spec.substr(open + 1));
+    char close = 0;
+    if (spec.back() != ']' || !(in >> offset.x() >> offset.y() >> offset.z() >> close) || close != ']' ||
+        !offset.allFinite())
+      throw std::invalid_argument(who + ": point '" + spec + "': expected Joint[x y z] (metres, in the joint's frame)");
+    joint = spec.substr(0, open);
+    has_offset = true;
+  }
+  const int j = sk.find_joint(joint);
+  if (j < 0) {
+    std::string msg = who + ": unknown joint '" + joint + "'";
+    const std::string near = nearest_joint_name(sk, joint);
+    if (!near.empty()) msg += " (nearest: '" + near + "')";
+    throw std::invalid_argument(msg);
+  }
+  PlantPoint p;
+  p.name = spec;
+  p.point.character = character;
+  p.point.joint = j;
+  if (end) {
+    if (sk.joint(j).end_sites.empty())
+      throw std::invalid_argument(who + ": joint '" + joint + "' has no End Site ('" + spec + "')");
+    p.point.local = sk.joint(j).end_sites.front();
+  }
+  if (has_offset) p.point.local = offset;
+  return p;
+}
+
+std::vector<Eigen::Vector3d> point_positions(const Motion& m, const std::vector<PlantPoint>& points) {
+  const Skeleton& sk = *m.skeleton;
+  std::vector<Eigen::Vector3d> out(static_cast<std::size_t>(m.frame_count()) * points.size());
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  for (int f = 0; f < m.frame_count(); ++f) {
+    forward_kinematics(sk, m.values.row(f), world);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      out[static_cast<std::size_t>(f) * points.size() + i] =
+          world[static_cast<std::size_t>(points[i].point.joint)] * points[i].point.local;
+  }
+  return out;
+}
+
+int FootplantDetection::count(int point) const {
+  return static_cast<int>(std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
+}
+
+FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o) {
+  if (!m.skeleton) throw std::invalid_argument("footplants: the motion has no skeleton");
+  if (!(o.height_threshold > 0) || !(o.speed_threshold > 0))
+    throw std::invalid_argument("footplants: height and speed thresholds must be positive");
+  if (!(o.hysteresis >= 1) || !std::isfinite(o.hysteresis))
+    throw std::invalid_argument("footplants: hysteresis must be >= 1 (leave thresholds = enter * hysteresis)");
+  if (!(o.floor_percentile >= 0 && o.floor_percentile <= 0.5))
+    throw std::invalid_argument("footplants: floor_percentile must be in [0, 0.5]");
+  if (!(o.min_duration_s >= 0) || o.min_duration_frames < 1)
+    throw std::invalid_argument("footplants: minimum duration must be >= 0 s and >= 1 frame");
+  if (!(o.rest_window_s >= 0) || !std::isfinite(o.rest_window_s))
+    throw std::invalid_argument("footplants: rest_window_s must be >= 0 s");
+  if (!(o.trim_distance >= 0) || !std::isfinite(o.trim_distance))
+    throw std::invalid_argument("footplants: trim_distance must be >= 0 m");
+  if (std::isinf(o.floor)) throw std::invalid_argument("footplants: the floor height is infinite");
+  const Skeleton& sk = *m.skeleton;
+  FootplantDetection d;
+  if (o.points.empty())
+    d.points = auto_points(sk, o.character, d.notes);
+  else
+    for (const std::string& name : o.points) d.points.push_back(find_point(sk, name, o.character));
+
+  const int frames = m.frame_count();
+  const std::size_t np = d.points.size();
+  const std::vector<Eigen::Vector3d> pos = point_positions(m, d.points);
+  auto at = [&](int f, std::size_t i) -> const Eigen::Vector3d& { return pos[static_cast<std::size_t>(f) * np + i]; };
+
+  std::vector<std::vector<double>> heights(np);
+  for (std::size_t i = 0; i < np; ++i) {
+    heights[i].resize(static_cast<std::size_t>(frames));
+    for (int f = 0; f < frames; ++f) heights[i][static_cast<std::size_t>(f)] = at(f, i).y();
+  }
+  std::vector<double> rest(np, 0.0);
+  const bool rest_on_floor = o.rest_on_floor && !std::isnan(o.floor);
+  for (std::size_t i = 0; i < np; ++i) rest[i] = rest_on_floor ? o.floor : percentile(heights[i], o.floor_percentile);
+  if (std::isnan(o.floor)) {
+    d.floor = np == 0 || frames == 0 ? 0.0 : *std::min_element(rest.begin(), rest.end());
+    std::ostringstream note;
+    note << "floor (estimated, " << o.floor_percentile * 100 << "th percentile of the lowest point): " << d.floor
+         << " m";
+    d.notes.push_back(note.str());
+    d.floor_estimated = true;
+  } else {
+    d.floor = o.floor;
+  }
+  for (std::size_t i = 0; i < np; ++i) {
+    d.points[i].rest_height = rest[i];
+    d.points[i].heights = heights[i];
+    d.points[i].rest_levels.assign(static_cast<std::size_t>(frames), rest[i]);
+  }
+  if (frames < 2) return d;
+
+  const int k = std::max(1, static_cast<int>(std::lround(m.fps / 60.0)));
+  const int half_window = static_cast<int>(std::lround(o.rest_window_s * m.fps / 2));
+  const int min_frames = std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
+  for (std::size_t i = 0; i < np; ++i) {
+    auto speed = [&](int f) {
+      const int a = std::max(0, f - k), b = std::min(frames - 1, f + k);
+      const Eigen::Vector3d dv = at(b, i) - at(a, i);
+      return std::hypot(dv.x(), dv.z()) * m.fps / (b - a);
+    };
+    auto close = [&](int first, int last) {
+      if (o.trim_distance > 0 && last > first) {
+        // Trim the ends that stray from the span's (component-wise) median position: the roll
+        // into and out of a plant, which the thresholds admit late or release late.
+        Eigen::Vector3d median;
+        std::vector<double> axis(static_cast<std::size_t>(last - first + 1));
+        for (int a = 0; a < 3; ++a) {
+          for (int f = first; f <= last; ++f) axis[static_cast<std::size_t>(f - first)] = at(f, i)[a];
+          median[a] = percentile(axis, 0.5);
+        }
+        while (first < last && (at(first, i) - median).norm() > o.trim_distance) ++first;
+        while (last > first && (at(last, i) - median).norm() > o.trim_distance) --last;
+      }
+      if (last - first + 1 < min_frames) return;
+      Footplant p;
+      p.point = static_cast<int>(i);
+      p.first_frame = first;
+      p.last_frame = last;
+      p.mean.setZero();
+      for (int f = first; f <= last; ++f) {
+        p.mean += at(f, i);
+        const Eigen::Vector3d dv = at(f, i) - at(first, i);
+        p.skate = std::max(p.skate, std::hypot(dv.x(), dv.z()));
+      }
+      p.mean /= static_cast<double>(last - first + 1);
+      d.plants.push_back(p);
+    };
+    // The rest level: the point's own low percentile, or its lowest height within the window
+    // around each frame (floors that slope or drift between steps).
+    std::vector<double> base(static_cast<std::size_t>(frames), d.points[i].rest_height);
+    if (half_window > 0 && !rest_on_floor)
+      for (int f = 0; f < frames; ++f) {
+        double low = kInf;
+        for (int g = std::max(0, f - half_window); g <= std::min(frames - 1, f + half_window); ++g)
+          low = std::min(low, heights[i][static_cast<std::size_t>(g)]);
+        base[static_cast<std::size_t>(f)] = low;
+      }
+    d.points[i].rest_levels = base;
+    bool in = false;
+    int start = 0;
+    for (int f = 0; f < frames; ++f) {
+      const double h = at(f, i).y() - base[static_cast<std::size_t>(f)], v = speed(f);
+      if (!in) {
+        if (h <= o.height_threshold && v <= o.speed_threshold) {
+          in = true;
+          start = f;
+        }
+      } else if (h > o.height_threshold * o.hysteresis || v > o.speed_threshold * o.hysteresis) {
+        in = false;
+        close(start, f - 1);
+      }
+    }
+    if (in) close(start, frames - 1);
+  }
+  return d;
+}
+
+std::vector<std::string> split_names(const std::string& text) {
+  std::vector<std::string> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    const auto a = item.find_first_not_of(" \t");
+    const auto b = item.find_last_not_of(" \t");
+    if (a != std::string::npos) out.push_back(item.substr(a, b - a + 1));
+  }
+  return out;
+}
+
+double parse_floor(const std::string& text) {
+  if (text == "auto" || text.empty()) return std::numeric_limits<double>::quiet_NaN();
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size() || !std::isfinite(v))
+    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
+  return v;
+}
+
+}  // namespace kg::motion
