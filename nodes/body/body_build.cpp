@@ -302,45 +302,59 @@ Eigen::RowVectorXd rest_pose_values(const Skeleton& skeleton) {
   return v;
 }
 
-BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const BodySpec& spec,
-                           const Eigen::RowVectorXd* reference_pose) {
-  if (!skeleton_ptr) throw std::invalid_argument("build_body_model: no skeleton");
-  const Skeleton& s = *skeleton_ptr;
-  const int n = s.joint_count();
-  if (n == 0) throw std::invalid_argument("build_body_model: the skeleton has no joint");
-  check_spec(spec);
-  const auto J = [](int j) { return static_cast<std::size_t>(j); };
+namespace {
 
-  BuiltBody out;
-  // Classes: the spec's patterns (each must match a joint), then the defaults.
+// Index of joint j in the per-joint vectors.
+std::size_t J(int j) {
+  return static_cast<std::size_t>(j);
+}
+
+// The joints no class pattern matched, and those matched to massless.
+struct ClassNames {
+  std::vector<std::string> unmatched, massless;
+};
+
+// Classes: the spec's patterns (each must match a joint), then the defaults.
+ClassNames match_classes(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
+  const int n = s.joint_count();
   std::vector<ClassPattern> all = spec.classes;
   all.insert(all.end(), default_class_patterns().begin(), default_class_patterns().end());
   const Matches user = match_first(s, all, "classes");
   require_matches(s, spec.classes, user, "classes");
   out.classes.assign(J(n), SegmentClass::Massless);
-  std::vector<std::string> unmatched, massless;
+  ClassNames names;
   for (int j = 0; j < n; ++j) {
     const int owner = user.owner[J(j)];
     if (owner >= 0) out.classes[J(j)] = all[J(owner)].segment_class;
     if (owner < 0)
-      unmatched.push_back(s.joint(j).name);
+      names.unmatched.push_back(s.joint(j).name);
     else if (out.classes[J(j)] == SegmentClass::Massless)
-      massless.push_back(s.joint(j).name);
+      names.massless.push_back(s.joint(j).name);
   }
   for (std::size_t p = 0; p < spec.classes.size(); ++p) {
-    std::vector<std::string> names;
+    std::vector<std::string> matched;
     for (int j : user.matched[p])
-      if (user.owner[J(j)] == static_cast<int>(p)) names.push_back(s.joint(j).name);
+      if (user.owner[J(j)] == static_cast<int>(p)) matched.push_back(s.joint(j).name);
     out.notes.push_back(
         "classes " + in_quotes(spec.classes[p].pattern) + " -> " + to_string(spec.classes[p].segment_class) +
-        ": " + (names.empty() ? std::string("no joint left (earlier patterns took them)") : join(names)));
+        ": " + (matched.empty() ? std::string("no joint left (earlier patterns took them)") : join(matched)));
   }
-  out.bones = segment_bones(s, out.classes);
+  return names;
+}
 
-  // Groups: one per head_neck and trunk, the connected runs of each limb class.
-  std::vector<int> group(J(n), -1);
-  std::vector<SegmentClass> group_class;
-  std::vector<std::vector<int>> group_joints;
+// The joints of a class form its groups: one per head_neck and trunk, the connected runs of each
+// limb class.
+struct Groups {
+  std::vector<int> of_joint;  // -1: massless
+  std::vector<SegmentClass> segment_class;
+  std::vector<std::vector<int>> joints;
+  std::vector<double> length;  // of the joints' bones together
+};
+
+Groups group_segments(const Skeleton& s, const BuiltBody& out) {
+  const int n = s.joint_count();
+  Groups groups;
+  groups.of_joint.assign(J(n), -1);
   std::array<int, kSegmentClassCount> single_group;
   single_group.fill(-1);
   for (int j = 0; j < n; ++j) {
@@ -351,33 +365,36 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
     if (!is_paired(c)) {
       g = single_group[J(index_of(c))];
     } else if (parent >= 0 && out.classes[J(parent)] == c) {
-      g = group[J(parent)];
+      g = groups.of_joint[J(parent)];
     }
     if (g < 0) {
-      g = static_cast<int>(group_class.size());
-      group_class.push_back(c);
-      group_joints.emplace_back();
+      g = static_cast<int>(groups.segment_class.size());
+      groups.segment_class.push_back(c);
+      groups.joints.emplace_back();
       if (!is_paired(c)) single_group[J(index_of(c))] = g;
     }
-    group[J(j)] = g;
-    group_joints[J(g)].push_back(j);
+    groups.of_joint[J(j)] = g;
+    groups.joints[J(g)].push_back(j);
   }
-  std::vector<double> group_length(group_class.size(), 0.0);
+  groups.length.assign(groups.segment_class.size(), 0.0);
   for (int j = 0; j < n; ++j)
-    if (group[J(j)] >= 0) group_length[J(group[J(j)])] += out.bones[J(j)].norm();
+    if (groups.of_joint[J(j)] >= 0) groups.length[J(groups.of_joint[J(j)])] += out.bones[J(j)].norm();
+  return groups;
+}
 
-  // Every table segment must be there: one group (two runs for a limb) with a bone.
+// Every table segment must be there: one group (two runs for a limb) with a bone.
+void require_table_segments(const Skeleton& s, const Groups& groups, const ClassNames& names) {
   std::vector<std::string> missing;
   for (int c = 0; c < kSegmentClassCount; ++c) {
     const SegmentClass sc = static_cast<SegmentClass>(c);
     std::vector<std::string> runs;
     bool zero = false;
-    for (std::size_t g = 0; g < group_class.size(); ++g) {
-      if (group_class[g] != sc) continue;
-      std::vector<std::string> names;
-      for (int j : group_joints[g]) names.push_back(s.joint(j).name);
-      runs.push_back(join(names, "+"));
-      zero = zero || !(group_length[g] > kZeroLength);
+    for (std::size_t g = 0; g < groups.segment_class.size(); ++g) {
+      if (groups.segment_class[g] != sc) continue;
+      std::vector<std::string> joint_names;
+      for (int j : groups.joints[g]) joint_names.push_back(s.joint(j).name);
+      runs.push_back(join(joint_names, "+"));
+      zero = zero || !(groups.length[g] > kZeroLength);
     }
     const std::size_t want = is_paired(sc) ? 2 : 1;
     const std::string name = to_string(sc);
@@ -391,34 +408,42 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
       missing.push_back(name + " (" + join(runs, ", ") +
                         ": no bone, every joint's children and End Sites are at its origin)");
   }
-  if (!missing.empty()) {
-    std::vector<std::string> candidates = unmatched;
-    candidates.insert(candidates.end(), massless.begin(), massless.end());
-    throw std::invalid_argument("the skeleton lacks table segments: " + join(missing, "; ") +
-                                ". Map its joints to classes in a body file (`file`), joint-name regex (the "
-                                "whole name) to class, e.g.\n"
-                                "  version: 1\n"
-                                "  classes:\n"
-                                "    \"LeftUpLeg|RightUpLeg\": thigh\n"
-                                "classes: " +
-                                join(segment_class_names()) + ". Joints without a class: " +
-                                (candidates.empty() ? std::string("none") : join(candidates)));
-  }
+  if (missing.empty()) return;
+  std::vector<std::string> candidates = names.unmatched;
+  candidates.insert(candidates.end(), names.massless.begin(), names.massless.end());
+  throw std::invalid_argument("the skeleton lacks table segments: " + join(missing, "; ") +
+                              ". Map its joints to classes in a body file (`file`), joint-name regex (the "
+                              "whole name) to class, e.g.\n"
+                              "  version: 1\n"
+                              "  classes:\n"
+                              "    \"LeftUpLeg|RightUpLeg\": thigh\n"
+                              "classes: " +
+                              join(segment_class_names()) + ". Joints without a class: " +
+                              (candidates.empty() ? std::string("none") : join(candidates)));
+}
 
-  // Anatomical directions in the reference pose.
+// Anatomical directions in the reference pose, and every joint's world frame in it.
+struct AnatomicalFrame {
+  std::vector<Eigen::Isometry3d> world;
+  Eigen::Vector3d lateral, forward;
+};
+
+AnatomicalFrame anatomical_frame(const Skeleton& s, const Eigen::RowVectorXd* reference_pose,
+                                 const Groups& groups, std::vector<std::string>& notes) {
   const Eigen::RowVectorXd rest = rest_pose_values(s);
   const Eigen::RowVectorXd& ref = reference_pose != nullptr ? *reference_pose : rest;
   if (ref.size() != s.channel_count())
     throw std::invalid_argument("build_body_model: reference pose of " + std::to_string(ref.size()) +
                                 " values for " + std::to_string(s.channel_count()) + " channels");
-  std::vector<Eigen::Isometry3d> world;
-  pose(s, ref, world);
+  AnatomicalFrame frame;
+  pose(s, ref, frame.world);
   const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
   Eigen::Vector3d lateral = Eigen::Vector3d::Zero();
   for (SegmentClass pair : {SegmentClass::Thigh, SegmentClass::UpperArm}) {
     std::vector<Eigen::Vector3d> heads;
-    for (std::size_t g = 0; g < group_class.size(); ++g)
-      if (group_class[g] == pair) heads.push_back(world[J(group_joints[g].front())].translation());
+    for (std::size_t g = 0; g < groups.segment_class.size(); ++g)
+      if (groups.segment_class[g] == pair)
+        heads.push_back(frame.world[J(groups.joints[g].front())].translation());
     if (heads.size() != 2) continue;
     Eigen::Vector3d d = heads[0] - heads[1];
     d -= d.dot(up) * up;
@@ -431,16 +456,54 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
     lateral = s.file_to_world * Eigen::Vector3d::UnitX();
     lateral -= lateral.dot(up) * up;
     lateral = lateral.norm() > 1e-6 ? lateral.normalized() : Eigen::Vector3d::UnitX();
-    out.notes.push_back(
+    notes.push_back(
         "no left/right thighs or upper arms apart in the reference pose: the file's X axis "
         "taken as mediolateral for the inertias' axes");
   }
-  const Eigen::Vector3d forward = up.cross(lateral).normalized();
+  frame.lateral = lateral;
+  frame.forward = up.cross(lateral).normalized();
+  return frame;
+}
 
-  // Masses, CoMs, inertias.
-  BodyModel& body = out.body;
-  body.skeleton = skeleton_ptr;
-  body.segments.assign(J(n), SegmentInertia{});
+// A segment of the table's fractions f: its share of the group's mass by bone length (l of the
+// group's L), its CoM on the bone, its inertia about the axes across the bone nearest the
+// anteroposterior and mediolateral directions (R: the joint's world rotation in the reference
+// pose).
+SegmentInertia table_segment(const SegmentFractions& f, double body_mass, const Eigen::Vector3d& bone,
+                             double L, const Eigen::Matrix3d& R, const AnatomicalFrame& frame) {
+  const double l = bone.norm();
+  const Eigen::Vector3d u = bone / l;
+  SegmentInertia seg;
+  seg.mass = f.mass * body_mass * l / L;
+  seg.com = f.com * bone;
+  const Eigen::Vector3d fwd = R.transpose() * frame.forward, lat = R.transpose() * frame.lateral;
+  Eigen::Vector3d a = fwd - fwd.dot(u) * u, m;
+  if (a.norm() < 0.5) {  // the bone lies within 30 degrees of the anteroposterior axis
+    m = lat - lat.dot(u) * u;
+    m = m.norm() > 1e-6 ? m.normalized() : any_perpendicular(u);
+    a = u.cross(m);
+  } else {
+    a.normalize();
+    m = u.cross(a);
+  }
+  const double girth = f.r_longitudinal * f.r_longitudinal / 2 * L * L;
+  const double r_sag2 =
+      std::max(f.r_sagittal * f.r_sagittal - f.r_longitudinal * f.r_longitudinal / 2, 0.0) * l * l + girth;
+  const double r_trans2 =
+      std::max(f.r_transverse * f.r_transverse - f.r_longitudinal * f.r_longitudinal / 2, 0.0) * l * l +
+      girth;
+  const double r_long2 = f.r_longitudinal * f.r_longitudinal * L * L;
+  seg.inertia =
+      seg.mass * (r_sag2 * a * a.transpose() + r_trans2 * m * m.transpose() + r_long2 * u * u.transpose());
+  return seg;
+}
+
+// Masses, CoMs, inertias, from the table or as cylinders of water. Returns the joints of a class
+// that have no bone, so no mass.
+std::vector<std::string> mass_properties(const Skeleton& s, const BodySpec& spec, const Groups& groups,
+                                         const AnatomicalFrame& frame, BuiltBody& out) {
+  const int n = s.joint_count();
+  out.body.segments.assign(J(n), SegmentInertia{});
   const bool cylinders = spec.table == BodyTable::Cylinders;
   const AnthropometricTable* table = cylinders ? nullptr : &anthropometric_table(spec.table);
   std::vector<std::string> zero_length;
@@ -453,40 +516,27 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
       zero_length.push_back(s.joint(j).name);
       continue;
     }
-    const Eigen::Vector3d u = bone / l;
-    SegmentInertia& seg = body.segments[J(j)];
+    SegmentInertia& seg = out.body.segments[J(j)];
     if (cylinders) {
       const double r = spec.radii[J(index_of(c))];
       seg.mass = kWaterDensity * std::numbers::pi * r * r * l;
       seg.com = bone / 2;
-      seg.inertia = cylinder_inertia(seg.mass, r, l, u);
+      seg.inertia = cylinder_inertia(seg.mass, r, l, bone / l);
       continue;
     }
-    const SegmentFractions& f = table->segment(c);
-    const double L = group_length[J(group[J(j)])];
-    seg.mass = f.mass * spec.mass * l / L;
-    seg.com = f.com * bone;
-    const Eigen::Matrix3d R = world[J(j)].rotation();
-    const Eigen::Vector3d fwd = R.transpose() * forward, lat = R.transpose() * lateral;
-    Eigen::Vector3d a = fwd - fwd.dot(u) * u, m;
-    if (a.norm() < 0.5) {  // the bone lies within 30 degrees of the anteroposterior axis
-      m = lat - lat.dot(u) * u;
-      m = m.norm() > 1e-6 ? m.normalized() : any_perpendicular(u);
-      a = u.cross(m);
-    } else {
-      a.normalize();
-      m = u.cross(a);
-    }
-    const double girth = f.r_longitudinal * f.r_longitudinal / 2 * L * L;
-    const double r_sag2 =
-        std::max(f.r_sagittal * f.r_sagittal - f.r_longitudinal * f.r_longitudinal / 2, 0.0) * l * l + girth;
-    const double r_trans2 =
-        std::max(f.r_transverse * f.r_transverse - f.r_longitudinal * f.r_longitudinal / 2, 0.0) * l * l +
-        girth;
-    const double r_long2 = f.r_longitudinal * f.r_longitudinal * L * L;
-    seg.inertia =
-        seg.mass * (r_sag2 * a * a.transpose() + r_trans2 * m * m.transpose() + r_long2 * u * u.transpose());
+    seg = table_segment(table->segment(c), spec.mass, bone, groups.length[J(groups.of_joint[J(j)])],
+                        frame.world[J(j)].rotation(), frame);
   }
+  return zero_length;
+}
+
+// Rescales the masses to the body mass asked for (cylinders with mass 0 keep their volumes'),
+// and notes where they came from and which joints have none.
+void rescale_to_body_mass(const BodySpec& spec, const std::vector<std::string>& zero_length,
+                          const ClassNames& names, BuiltBody& out) {
+  BodyModel& body = out.body;
+  const bool cylinders = spec.table == BodyTable::Cylinders;
+  const AnthropometricTable* table = cylinders ? nullptr : &anthropometric_table(spec.table);
   double sum = 0;
   for (const SegmentInertia& seg : body.segments) sum += seg.mass;
   const std::string source = cylinders ? std::string("cylinders of water (1000 kg/m³)")
@@ -510,10 +560,42 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
   if (!zero_length.empty())
     out.notes.push_back("no bone, so no mass (children and End Sites at the joint's origin): " +
                         join(zero_length));
-  if (!massless.empty()) out.notes.push_back("massless by class: " + join(massless));
-  if (!unmatched.empty()) out.notes.push_back("massless, no class pattern matched: " + join(unmatched));
+  if (!names.massless.empty()) out.notes.push_back("massless by class: " + join(names.massless));
+  if (!names.unmatched.empty())
+    out.notes.push_back("massless, no class pattern matched: " + join(names.unmatched));
+}
 
-  // Overrides.
+// One override on a joint with a class (`what` names both in messages).
+void override_segment(const SegmentOverride& o, const std::string& what, const Eigen::Vector3d& bone,
+                      SegmentInertia& seg) {
+  if (o.radius) {
+    if (!(bone.norm() > kZeroLength))
+      throw Error(what + " has no bone for a cylinder along it: give `inertia` instead of `radius`", o.where);
+    seg.mass = kWaterDensity * std::numbers::pi * *o.radius * *o.radius * bone.norm();
+    seg.com = bone / 2;
+    seg.inertia = cylinder_inertia(seg.mass, *o.radius, bone.norm(), bone.normalized());
+  }
+  if (o.mass) {
+    if (seg.mass > 0) {
+      seg.inertia *= *o.mass / seg.mass;
+    } else if (!o.inertia) {
+      throw Error(what + " has no bone, so no shape: give its `inertia` with its mass", o.where);
+    }
+    seg.mass = *o.mass;
+  }
+  if (o.mass_scale) {
+    seg.mass *= *o.mass_scale;
+    seg.inertia *= *o.mass_scale;
+  }
+  if (o.com) seg.com = *o.com;
+  if (o.inertia) {
+    if (!(seg.mass > 0)) throw Error(what + " has no mass: give its `mass` with its inertia", o.where);
+    seg.inertia = *o.inertia;
+  }
+}
+
+// Overrides, after the masses: the first matching pattern wins per joint.
+void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
   const Matches om = match_first(s, spec.segments, "segments");
   require_matches(s, spec.segments, om, "segments");
   for (std::size_t p = 0; p < spec.segments.size(); ++p) {
@@ -522,7 +604,7 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
     for (int j : om.matched[p]) {
       if (om.owner[J(j)] != static_cast<int>(p)) continue;
       const std::string& name = s.joint(j).name;
-      SegmentInertia& seg = body.segments[J(j)];
+      SegmentInertia& seg = out.body.segments[J(j)];
       const std::string what = "segments " + in_quotes(o.pattern) + ": joint " + in_quotes(name);
       if (out.classes[J(j)] == SegmentClass::Massless) {
         if (o.mass || o.radius || o.inertia)
@@ -532,46 +614,29 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
         continue;
       }
       const double before = seg.mass;
-      const Eigen::Vector3d& bone = out.bones[J(j)];
-      if (o.radius) {
-        if (!(bone.norm() > kZeroLength))
-          throw Error(what + " has no bone for a cylinder along it: give `inertia` instead of `radius`",
-                      o.where);
-        seg.mass = kWaterDensity * std::numbers::pi * *o.radius * *o.radius * bone.norm();
-        seg.com = bone / 2;
-        seg.inertia = cylinder_inertia(seg.mass, *o.radius, bone.norm(), bone.normalized());
-      }
-      if (o.mass) {
-        if (seg.mass > 0) {
-          seg.inertia *= *o.mass / seg.mass;
-        } else if (!o.inertia) {
-          throw Error(what + " has no bone, so no shape: give its `inertia` with its mass", o.where);
-        }
-        seg.mass = *o.mass;
-      }
-      if (o.mass_scale) {
-        seg.mass *= *o.mass_scale;
-        seg.inertia *= *o.mass_scale;
-      }
-      if (o.com) seg.com = *o.com;
-      if (o.inertia) {
-        if (!(seg.mass > 0)) throw Error(what + " has no mass: give its `mass` with its inertia", o.where);
-        seg.inertia = *o.inertia;
-      }
+      override_segment(o, what, out.bones[J(j)], seg);
       done.push_back(name + " " + fmt(before) + " -> " + fmt(seg.mass) + " kg");
     }
     out.notes.push_back(
         "segments " + in_quotes(o.pattern) + ": " +
         (done.empty() ? std::string("no joint left (earlier patterns took them)") : join(done)));
   }
-  for (int j = 0; j < n; ++j) {
-    const SegmentClass c = out.classes[J(j)];
-    const double m = body.segments[J(j)].mass;
-    body.segment_class.push_back(m > 0 ? to_string(c) : "");
+}
+
+void sum_class_masses(BuiltBody& out) {
+  for (std::size_t j = 0; j < out.classes.size(); ++j) {
+    const SegmentClass c = out.classes[j];
+    const double m = out.body.segments[j].mass;
+    out.body.segment_class.push_back(m > 0 ? to_string(c) : "");
     if (c != SegmentClass::Massless) out.class_mass[J(index_of(c))] += m;
   }
+}
 
-  // Torque limits: the floating base unactuated, the rest unlimited unless a pattern says.
+// The floating base is unactuated, the rest unlimited until a pattern says. Returns which joints
+// are the floating base.
+std::vector<bool> unactuate_floating_base(const Skeleton& s, BuiltBody& out) {
+  const int n = s.joint_count();
+  BodyModel& body = out.body;
   const int channels = s.channel_count();
   const double inf = std::numeric_limits<double>::infinity();
   body.torque_min = Eigen::VectorXd::Constant(channels, -inf);
@@ -589,6 +654,28 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
     if (count > 0) base.push_back(jt.name);
   }
   if (!base.empty()) out.notes.push_back("unactuated (floating base): " + join(base));
+  return floating;
+}
+
+// Bounds joint jt's channels by the limit t: one value for every rotation channel, or one per channel.
+void limit_joint(const TorqueLimit& t, const motion::Joint& jt, BodyModel& body) {
+  if (t.values.size() != 1 && t.values.size() != jt.channels.size())
+    throw Error("torque_limits " + in_quotes(t.pattern) + ": " + std::to_string(t.values.size()) +
+                    " values for joint " + in_quotes(jt.name) + ", which has " +
+                    std::to_string(jt.channels.size()) + " channels (give one value, or one per channel)",
+                t.where);
+  for (std::size_t c = 0; c < jt.channels.size(); ++c) {
+    const bool single = t.values.size() == 1;
+    if (single && !motion::is_rotation(jt.channels[c].kind)) continue;
+    const double v = single ? t.values[0] : t.values[c];
+    body.torque_min[jt.first_channel + static_cast<int>(c)] = -v;
+    body.torque_max[jt.first_channel + static_cast<int>(c)] = v;
+  }
+}
+
+// Torque limits: the first matching pattern wins per joint; the floating base stays unactuated.
+void apply_torque_limits(const Skeleton& s, const BodySpec& spec, const std::vector<bool>& floating,
+                         BuiltBody& out) {
   const Matches tm = match_first(s, spec.torque_limits, "torque_limits");
   require_matches(s, spec.torque_limits, tm, "torque_limits");
   for (std::size_t p = 0; p < spec.torque_limits.size(); ++p) {
@@ -601,18 +688,7 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
         skipped.push_back(jt.name);
         continue;
       }
-      if (t.values.size() != 1 && t.values.size() != jt.channels.size())
-        throw Error("torque_limits " + in_quotes(t.pattern) + ": " + std::to_string(t.values.size()) +
-                        " values for joint " + in_quotes(jt.name) + ", which has " +
-                        std::to_string(jt.channels.size()) + " channels (give one value, or one per channel)",
-                    t.where);
-      for (std::size_t c = 0; c < jt.channels.size(); ++c) {
-        const bool single = t.values.size() == 1;
-        if (single && !motion::is_rotation(jt.channels[c].kind)) continue;
-        const double v = single ? t.values[0] : t.values[c];
-        body.torque_min[jt.first_channel + static_cast<int>(c)] = -v;
-        body.torque_max[jt.first_channel + static_cast<int>(c)] = v;
-      }
+      limit_joint(t, jt, out.body);
       done.push_back(jt.name);
     }
     if (done.empty() && !skipped.empty())
@@ -624,9 +700,33 @@ BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const B
         (t.values.size() == 1 ? fmt(t.values[0]) + " N m" : std::to_string(t.values.size()) + " values") +
         ": " + (done.empty() ? std::string("no joint left (earlier patterns took them)") : join(done)));
   }
-  body.friction = spec.friction;
-  body.gravity = spec.gravity;
-  check_body_model(body);
+}
+
+}  // namespace
+
+BuiltBody build_body_model(std::shared_ptr<const Skeleton> skeleton_ptr, const BodySpec& spec,
+                           const Eigen::RowVectorXd* reference_pose) {
+  if (!skeleton_ptr) throw std::invalid_argument("build_body_model: no skeleton");
+  const Skeleton& s = *skeleton_ptr;
+  if (s.joint_count() == 0) throw std::invalid_argument("build_body_model: the skeleton has no joint");
+  check_spec(spec);
+
+  BuiltBody out;
+  const ClassNames names = match_classes(s, spec, out);
+  out.bones = segment_bones(s, out.classes);
+  const Groups groups = group_segments(s, out);
+  require_table_segments(s, groups, names);
+  const AnatomicalFrame frame = anatomical_frame(s, reference_pose, groups, out.notes);
+  out.body.skeleton = skeleton_ptr;
+  const std::vector<std::string> zero_length = mass_properties(s, spec, groups, frame, out);
+  rescale_to_body_mass(spec, zero_length, names, out);
+  apply_overrides(s, spec, out);
+  sum_class_masses(out);
+  const std::vector<bool> floating = unactuate_floating_base(s, out);
+  apply_torque_limits(s, spec, floating, out);
+  out.body.friction = spec.friction;
+  out.body.gravity = spec.gravity;
+  check_body_model(out.body);
   return out;
 }
 

@@ -108,117 +108,145 @@ class Reader : public kg::YamlReader {
       if (e.key == "version") continue;
       out.given.push_back(e.key);
       if (e.key == "table") {
-        if (!e.value.IsScalar()) fail("table: expected one of " + join(body_table_names()), e.value);
-        const auto t = body_table_from_string(e.value.Scalar());
-        if (!t) {
-          const std::string near = kg::nearest_name(e.value.Scalar(), body_table_names());
-          fail("table: unknown table " + in_quotes(e.value.Scalar()) +
-                   (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
-                   join(body_table_names()),
-               e.value);
-        }
-        spec.table = *t;
+        spec.table = table(e.value);
       } else if (e.key == "mass") {
         spec.mass = non_negative(e.value, "mass");
         mass = &e;
       } else if (e.key == "radii") {
-        for (const Entry& r : entries(e.value, "radii")) {
-          const auto c = segment_class_from_string(r.key);
-          if (!c || *c == SegmentClass::Massless) {
-            std::vector<std::string> names = segment_class_names();
-            names.pop_back();  // massless has no radius
-            const std::string near = kg::nearest_name(r.key, names);
-            fail("unknown class " + in_quotes(r.key) + " in radii" +
-                     (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
-                     "; allowed: " + join(names),
-                 r.key_node);
-          }
-          spec.radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, "radii." + r.key);
-        }
+        read_radii(e.value, spec.radii);
       } else if (e.key == "classes") {
-        spec.classes.clear();
-        for (const Entry& c : entries(e.value, "classes")) {
-          check_regex(c, "classes");
-          if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
-            const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
-            const std::string near = kg::nearest_name(got, segment_class_names());
-            fail("classes." + c.key + ": unknown class " + in_quotes(got) +
-                     (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
-                     join(segment_class_names()),
-                 c.value);
-          }
-          spec.classes.push_back({c.key, *segment_class_from_string(c.value.Scalar()), at(c.key_node)});
-        }
+        spec.classes = classes(e.value);
       } else if (e.key == "segments") {
-        spec.segments.clear();
-        for (const Entry& s : entries(e.value, "segments")) {
-          check_regex(s, "segments");
-          const std::string what = "segments." + s.key;
-          const std::vector<Entry> fields = entries(s.value, what);
-          check_keys(fields, what, {"mass", "mass_scale", "com", "inertia", "radius"});
-          if (fields.empty())
-            fail(what + ": expected at least one of mass, mass_scale, com, inertia, radius", s.value);
-          SegmentOverride o{.pattern = s.key, .where = at(s.key_node)};
-          for (const Entry& f : fields) {
-            const std::string fw = what + "." + f.key;
-            if (f.key == "mass") o.mass = positive(f.value, fw);
-            if (f.key == "mass_scale") o.mass_scale = positive(f.value, fw);
-            if (f.key == "radius") o.radius = positive(f.value, fw);
-            if (f.key == "com") o.com = vector3(f.value, fw);
-            if (f.key == "inertia") o.inertia = inertia(f.value, fw);
-            if (o.mass && o.mass_scale) fail(what + ": give mass or mass_scale, not both", f.key_node);
-          }
-          spec.segments.push_back(std::move(o));
-        }
+        spec.segments = segments(e.value);
       } else if (e.key == "torque_limits") {
-        spec.torque_limits.clear();
-        for (const Entry& t : entries(e.value, "torque_limits")) {
-          check_regex(t, "torque_limits");
-          const std::string what = "torque_limits." + t.key;
-          TorqueLimit limit{.pattern = t.key, .values = {}, .where = at(t.key_node)};
-          if (t.value.IsSequence()) {
-            limit.values = numbers(t.value, what, true);
-            if (limit.values.empty())
-              fail(what + ": expected one bound per channel, got an empty list", t.value);
-            for (std::size_t i = 0; i < limit.values.size(); ++i)
-              if (!(limit.values[i] > 0))
-                fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " +
-                         fmt(limit.values[i]),
-                     t.value[i]);
-          } else {
-            const double v = number(t.value, what, true);
-            if (!(v > 0)) fail(what + ": expected N m > 0 (or .inf), got " + fmt(v), t.value);
-            limit.values = {v};
-          }
-          spec.torque_limits.push_back(std::move(limit));
-        }
+        spec.torque_limits = torque_limits(e.value);
       } else if (e.key == "friction") {
         spec.friction = non_negative(e.value, "friction");
       } else if (e.key == "gravity") {
-        if (e.value.IsSequence()) {
-          spec.gravity = vector3(e.value, "gravity");
-        } else {
-          if (!e.value.IsScalar())
-            fail("gravity: expected m/s² (straight down) or a vector [x, y, z]", e.value);
-          const double g = number(e.value, "gravity");
-          if (g < 0)
-            fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " +
-                     fmt(g),
-                 e.value);
-          spec.gravity = Eigen::Vector3d(0, -g, 0);
-        }
+        spec.gravity = gravity(e.value);
       }
     }
-    if (spec.table != BodyTable::Cylinders && !(spec.mass > 0)) {
-      const std::string msg = "mass " + fmt(spec.mass) + " kg with table " + to_string(spec.table) +
-                              ": expected > 0 (0 means 'from the volumes' only with cylinders)";
-      if (mass != nullptr) fail(msg, mass->value);
-      throw Error(msg, {path(), 1, 1});
-    }
+    check_mass(spec, mass);
     return out;
   }
 
  private:
+  BodyTable table(const YAML::Node& n) const {
+    if (!n.IsScalar()) fail("table: expected one of " + join(body_table_names()), n);
+    const auto t = body_table_from_string(n.Scalar());
+    if (!t) {
+      const std::string near = kg::nearest_name(n.Scalar(), body_table_names());
+      fail("table: unknown table " + in_quotes(n.Scalar()) +
+               (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
+               join(body_table_names()),
+           n);
+    }
+    return *t;
+  }
+
+  // The radii given replace those of `radii`, the others stay.
+  void read_radii(const YAML::Node& n, std::array<double, kSegmentClassCount>& radii) const {
+    for (const Entry& r : entries(n, "radii")) {
+      const auto c = segment_class_from_string(r.key);
+      if (!c || *c == SegmentClass::Massless) {
+        std::vector<std::string> names = segment_class_names();
+        names.pop_back();  // massless has no radius
+        const std::string near = kg::nearest_name(r.key, names);
+        fail("unknown class " + in_quotes(r.key) + " in radii" +
+                 (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
+                 "; allowed: " + join(names),
+             r.key_node);
+      }
+      radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, "radii." + r.key);
+    }
+  }
+
+  std::vector<ClassPattern> classes(const YAML::Node& n) const {
+    std::vector<ClassPattern> out;
+    for (const Entry& c : entries(n, "classes")) {
+      check_regex(c, "classes");
+      if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
+        const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
+        const std::string near = kg::nearest_name(got, segment_class_names());
+        fail("classes." + c.key + ": unknown class " + in_quotes(got) +
+                 (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
+                 join(segment_class_names()),
+             c.value);
+      }
+      out.push_back({c.key, *segment_class_from_string(c.value.Scalar()), at(c.key_node)});
+    }
+    return out;
+  }
+
+  SegmentOverride segment_override(const Entry& s) const {
+    check_regex(s, "segments");
+    const std::string what = "segments." + s.key;
+    const std::vector<Entry> fields = entries(s.value, what);
+    check_keys(fields, what, {"mass", "mass_scale", "com", "inertia", "radius"});
+    if (fields.empty())
+      fail(what + ": expected at least one of mass, mass_scale, com, inertia, radius", s.value);
+    SegmentOverride o{.pattern = s.key, .where = at(s.key_node)};
+    for (const Entry& f : fields) {
+      const std::string fw = what + "." + f.key;
+      if (f.key == "mass") o.mass = positive(f.value, fw);
+      if (f.key == "mass_scale") o.mass_scale = positive(f.value, fw);
+      if (f.key == "radius") o.radius = positive(f.value, fw);
+      if (f.key == "com") o.com = vector3(f.value, fw);
+      if (f.key == "inertia") o.inertia = inertia(f.value, fw);
+      if (o.mass && o.mass_scale) fail(what + ": give mass or mass_scale, not both", f.key_node);
+    }
+    return o;
+  }
+
+  std::vector<SegmentOverride> segments(const YAML::Node& n) const {
+    std::vector<SegmentOverride> out;
+    for (const Entry& s : entries(n, "segments")) out.push_back(segment_override(s));
+    return out;
+  }
+
+  TorqueLimit torque_limit(const Entry& t) const {
+    check_regex(t, "torque_limits");
+    const std::string what = "torque_limits." + t.key;
+    TorqueLimit limit{.pattern = t.key, .values = {}, .where = at(t.key_node)};
+    if (t.value.IsSequence()) {
+      limit.values = numbers(t.value, what, true);
+      if (limit.values.empty()) fail(what + ": expected one bound per channel, got an empty list", t.value);
+      for (std::size_t i = 0; i < limit.values.size(); ++i)
+        if (!(limit.values[i] > 0))
+          fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " + fmt(limit.values[i]),
+               t.value[i]);
+    } else {
+      const double v = number(t.value, what, true);
+      if (!(v > 0)) fail(what + ": expected N m > 0 (or .inf), got " + fmt(v), t.value);
+      limit.values = {v};
+    }
+    return limit;
+  }
+
+  std::vector<TorqueLimit> torque_limits(const YAML::Node& n) const {
+    std::vector<TorqueLimit> out;
+    for (const Entry& t : entries(n, "torque_limits")) out.push_back(torque_limit(t));
+    return out;
+  }
+
+  Eigen::Vector3d gravity(const YAML::Node& n) const {
+    if (n.IsSequence()) return vector3(n, "gravity");
+    if (!n.IsScalar()) fail("gravity: expected m/s² (straight down) or a vector [x, y, z]", n);
+    const double g = number(n, "gravity");
+    if (g < 0)
+      fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " + fmt(g),
+           n);
+    return Eigen::Vector3d(0, -g, 0);
+  }
+
+  // A table needs a mass > 0, located at the file's `mass` when it gave one.
+  void check_mass(const BodySpec& spec, const Entry* mass) const {
+    if (spec.table == BodyTable::Cylinders || spec.mass > 0) return;
+    const std::string msg = "mass " + fmt(spec.mass) + " kg with table " + to_string(spec.table) +
+                            ": expected > 0 (0 means 'from the volumes' only with cylinders)";
+    if (mass != nullptr) fail(msg, mass->value);
+    throw Error(msg, {path(), 1, 1});
+  }
 };
 
 }  // namespace

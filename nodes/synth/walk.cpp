@@ -131,6 +131,294 @@ class FootTrack {
   std::vector<double> lift_;
 };
 
+void check_options(const WalkOptions& options) {
+  check_range("walk", "steps", options.steps, kStepsRange.min, kStepsRange.max, "");
+  check_range("walk", "speed", options.speed, kSpeedRange.min, kSpeedRange.max, "m/s");
+  check_range("walk", "stature", options.stature, kStatureRange.min, kStatureRange.max, "m");
+  check_range("walk", "fps", options.fps, kFpsRange.min, kFpsRange.max, "frames/s");
+}
+
+// Timeline: stand still, then the pelvis accelerates over one step time to `speed` as the first
+// (right) heel strikes; steps follow every T; the closing step lands as the pelvis stops.
+struct WalkTimeline {
+  int steps = 0;
+  double start = 0, stop = 0, settle = 0, end = 0;
+  std::vector<double> strike;  // strike[k], k = 1..steps
+};
+
+WalkTimeline plan_timeline(int n, const GaitParameters& gait) {
+  WalkTimeline tl;
+  tl.steps = n;
+  tl.start = 0.35;
+  tl.strike.resize(static_cast<std::size_t>(n) + 1);
+  for (int k = 1; k <= n; ++k) tl.strike[static_cast<std::size_t>(k)] = tl.start + k * gait.step_time;
+  tl.stop = tl.strike[static_cast<std::size_t>(n)];
+  tl.settle = tl.stop + 0.3;
+  tl.end = tl.stop + 0.6;
+  return tl;
+}
+
+Side step_side(int k) {
+  return k % 2 == 1 ? kRight : kLeft;
+}
+
+std::array<std::vector<Footprint>, 2> place_footprints(const FigureDimensions& dims,
+                                                       const GaitParameters& gait, const WalkTimeline& tl) {
+  const int n = tl.steps;
+  const double H = dims.stature, v = gait.speed, L = gait.step_length;
+  const double stance = gait.stance_time(), swing = gait.swing_time();
+  auto step_z = [&](int k) { return std::min(k, n - 1) * L; };
+  const double foot_x = 0.035 * H, toe_out = 0.1;
+  const double strike_pitch = -std::clamp(0.18 + 0.1 * v, 0.2, 0.4);
+  const double off_pitch = std::clamp(0.5 + 0.2 * v, 0.6, 0.95);
+  const double rocker = 0.12 * stance, heel_rise = 0.4 * stance;
+  std::array<std::vector<Footprint>, 2> prints;
+  for (Side side : {kLeft, kRight}) {
+    Footprint p;
+    p.ankle = Eigen::Vector3d(side_sign(side) * foot_x, dims.ankle_height, 0);
+    p.yaw = side_sign(side) * toe_out;
+    prints[side].push_back(p);
+  }
+  for (int k = 1; k <= n; ++k) {
+    const Side side = step_side(k);
+    Footprint p;
+    p.ankle = Eigen::Vector3d(side_sign(side) * foot_x, dims.ankle_height, step_z(k));
+    p.yaw = side_sign(side) * toe_out;
+    p.strike = tl.strike[static_cast<std::size_t>(k)];
+    p.flat = p.strike + rocker;
+    p.strike_pitch = k == n ? 0.6 * strike_pitch : strike_pitch;
+    Footprint& prev = prints[side].back();
+    prev.toe_off = p.strike - swing;
+    prev.heel_off = std::max(prev.toe_off - heel_rise, std::isfinite(prev.flat) ? prev.flat + 0.02 : 0.1);
+    prev.off_pitch = off_pitch;
+    prev.off_rate = 2 * off_pitch / (prev.toe_off - prev.heel_off);
+    prints[side].push_back(p);
+  }
+  return prints;
+}
+
+// Pelvis: forward progress (exactly `speed` from the first to the last full step), `z_bias` ahead
+// of the feet when standing.
+Curve forward_progress(const WalkTimeline& tl, const GaitParameters& gait, double z_bias) {
+  const int n = tl.steps;
+  const double v = gait.speed, L = gait.step_length;
+  const std::vector<double>& strike = tl.strike;
+  Curve z;
+  z.add_hold(0, tl.start, z_bias);
+  z.add_quintic(tl.start, strike[1], z_bias, 0, 0, z_bias + 0.5 * L, v, 0);
+  if (n > 2)
+    z.add_poly(strike[1], strike[static_cast<std::size_t>(n - 1)], {z_bias + 0.5 * L, v, 0, 0, 0, 0});
+  z.add_quintic(strike[static_cast<std::size_t>(n - 1)], tl.stop, z_bias + (n - 1.5) * L, v, 0,
+                z_bias + (n - 1) * L, 0, 0);
+  z.add_hold(tl.stop, tl.end, z_bias + (n - 1) * L);
+  return z;
+}
+
+double speed_scale(const GaitParameters& gait) {
+  return std::clamp(gait.speed / 1.3, 0.4, 1.5);
+}
+
+struct PelvisCurves {
+  Curve x, yaw, roll, pitch, lean;
+};
+
+// The pelvis sways over the stance foot at mid-swing, rotates forward on the side of the landing
+// foot, lists down on the swing side and tilts forward; the trunk counter-rotates (pose_at) and
+// leans forward.
+PelvisCurves pelvis_curves(const WalkTimeline& tl, const GaitParameters& gait, double H) {
+  const int n = tl.steps;
+  const double v = gait.speed, swing = gait.swing_time();
+  const std::vector<double>& strike = tl.strike;
+  const double sway = 0.0125 * H * std::min(std::sqrt(1.3 / v), 1.3);
+  const double yaw_amp = 0.07 * speed_scale(gait), list_amp = 0.06 * speed_scale(gait);
+  const double tilt_stand = 0.03, tilt_walk = 0.03 + 0.03 * v;
+  const double lean_stand = 0.0, lean_walk = 0.02 + 0.02 * v;
+  std::vector<std::pair<double, double>> kx{{0.1, 0}}, kyaw{{tl.start, 0}}, kroll{{tl.start, 0}};
+  std::vector<std::pair<double, double>> kpitch{{tl.start, tilt_stand}}, klean{{tl.start, lean_stand}};
+  for (int k = 1; k <= n; ++k) {
+    const Side side = step_side(k);
+    const double sgn = side == kRight ? 1.0 : -1.0;  // right heel strike: right hip forward
+    const double t = strike[static_cast<std::size_t>(k)];
+    const double mid_swing = t - swing / 2;
+    const double scale = k == n ? 0.4 : 1.0;  // the closing step is a small one
+    kx.push_back({mid_swing, -side_sign(side) * sway * scale});
+    kroll.push_back({mid_swing, sgn * list_amp * scale});
+    kyaw.push_back({t, sgn * yaw_amp * scale});
+  }
+  if (n > 1) {
+    kpitch.push_back({strike[1], tilt_walk});
+    klean.push_back({strike[1], lean_walk});
+  }
+  if (n > 2) {
+    kpitch.push_back({strike[static_cast<std::size_t>(n - 1)], tilt_walk});
+    klean.push_back({strike[static_cast<std::size_t>(n - 1)], lean_walk});
+  }
+  for (auto* keys : {&kx, &kyaw, &kroll}) keys->push_back({tl.settle, 0});
+  kpitch.push_back({tl.settle, tilt_stand});
+  klean.push_back({tl.settle, lean_stand});
+  return {monotone_curve(kx), monotone_curve(kyaw), monotone_curve(kroll), monotone_curve(kpitch),
+          monotone_curve(klean)};
+}
+
+struct ArmCurves {
+  std::array<Curve, 2> flex, elbow;
+};
+
+// The arms swing against the legs.
+ArmCurves arm_curves(const WalkTimeline& tl, const GaitParameters& gait) {
+  const int n = tl.steps;
+  const double arm_amp = 0.28 * speed_scale(gait), arm_mean = -0.05;
+  std::array<std::vector<std::pair<double, double>>, 2> kflex, kelbow;
+  for (Side side : {kLeft, kRight}) {
+    kflex[side] = {{tl.start, 0}};
+    kelbow[side] = {{tl.start, 0.1}};
+  }
+  for (int k = 1; k <= n; ++k) {
+    const Side side = step_side(k);
+    const double t = tl.strike[static_cast<std::size_t>(k)];
+    const double scale = k == n ? 0.4 : 1.0;  // the closing step is a small one
+    const Side other = side == kLeft ? kRight : kLeft;
+    kflex[side].push_back({t, (arm_mean - arm_amp) * scale});
+    kflex[other].push_back({t, (arm_mean + arm_amp) * scale});
+    kelbow[side].push_back({t, 0.2});
+    kelbow[other].push_back({t, 0.2 + 0.3 * speed_scale(gait) * scale});
+  }
+  for (Side side : {kLeft, kRight}) {
+    kflex[side].push_back({tl.stop + 0.45, 0});
+    kelbow[side].push_back({tl.stop + 0.45, 0.1});
+  }
+  return {{monotone_curve(kflex[kLeft]), monotone_curve(kflex[kRight])},
+          {monotone_curve(kelbow[kLeft]), monotone_curve(kelbow[kRight])}};
+}
+
+// Everything a pose of the walk comes from but the pelvis height.
+struct Walk {
+  const Figure& fig;
+  const GaitParameters& gait;
+  const WalkTimeline& timeline;
+  const std::array<FootTrack, 2>& feet;
+  double z_bias = 0;  // hips slightly ahead of the ankles, as when standing
+  Curve z;
+  PelvisCurves pelvis;
+  ArmCurves arms;
+};
+
+// Planted legs reach with at most this of their length.
+constexpr double kLimit = 0.998;
+
+// A swinging foot's target drawn towards the hip where it would stretch the leg past kLimit
+// (just after toe off, when the hips run ahead), saturating smoothly (tanh: C2) below the IK's
+// reach. The planted feet never exceed kLimit (the pelvis height search sees to it), so the
+// swing starts and ends untouched.
+void draw_in(const Walk& w, BodyPose& p, Side side) {
+  const double reach = 0.999 * w.fig.dims.leg_length(), soft = kLimit * w.fig.dims.leg_length();
+  const Eigen::Vector3d hip = p.root + p.pelvis * w.fig.skeleton->joint(w.fig.up_leg[side]).offset;
+  const Eigen::Vector3d d = p.feet[side].ankle - hip;
+  const double D = d.norm();
+  if (D <= soft) return;
+  p.feet[side].ankle = hip + d * ((soft + (reach - soft) * std::tanh((D - soft) / (reach - soft))) / D);
+}
+
+BodyPose pose_at(const Walk& w, double t, const Curve& height) {
+  const PelvisCurves& pelvis = w.pelvis;
+  BodyPose p;
+  p.root = Eigen::Vector3d(pelvis.x.value(t), height.value(t), w.z.value(t));
+  const double yw = pelvis.yaw.value(t);
+  p.pelvis = rot_y(yw) * rot_z(pelvis.roll.value(t)) * rot_x(pelvis.pitch.value(t));
+  p.chest = rot_y(-0.6 * yw) * rot_x(pelvis.lean.value(t));
+  p.head = rot_x(0.02);
+  for (Side side : {kLeft, kRight}) {
+    p.arms[side] = {0.1, w.arms.flex[side].value(t), w.arms.elbow[side].value(t)};
+    p.feet[side] = w.feet[side].at(t);
+    if (!w.feet[side].on_floor(t)) draw_in(w, p, side);
+  }
+  return p;
+}
+
+// Walking, the pelvis is low (`low`) in the middle of each double support and high (`high`, at
+// most standing) in single support as it passes over the stance ankle.
+Curve height_curve(const Walk& w, double y_stand, double low, double high) {
+  const WalkTimeline& tl = w.timeline;
+  const int n = tl.steps;
+  const double v = w.gait.speed, T = w.gait.step_time, L = w.gait.step_length;
+  const double swing = w.gait.swing_time(), dsupport = w.gait.double_support_time();
+  high = std::min(high, y_stand);
+  std::vector<std::pair<double, double>> keys{{tl.start, y_stand}, {tl.strike[1] - swing, high}};
+  for (int k = 1; k < n; ++k) {
+    const double t = tl.strike[static_cast<std::size_t>(k)];
+    keys.push_back({t + dsupport / 2, low});
+    if (k + 1 < n) {
+      const double over_ankle = t + (0.5 * L - w.z_bias) / v;  // pelvis above the stance ankle
+      keys.push_back({std::clamp(over_ankle, t + dsupport, t + T - 0.5 * dsupport), high});
+    }
+  }
+  keys.push_back({tl.settle, y_stand});
+  return monotone_curve(keys);
+}
+
+// The largest extension of a planted leg over the walk.
+double worst_extension(const Walk& w, const PoseWriter& writer, const Curve& height) {
+  // Sampled at a fixed rate, not at `fps`, so every frame rate gets the same curves.
+  const double search_rate = 240, end = w.timeline.end;
+  const int search_samples = static_cast<int>(std::ceil(end * search_rate)) + 1;
+  double worst = 0;
+  for (int i = 0; i < search_samples; ++i) {
+    const double t = std::min(i / search_rate, end);
+    const BodyPose p = pose_at(w, t, height);
+    for (Side side : {kLeft, kRight})
+      if (w.feet[side].on_floor(t)) worst = std::max(worst, writer.leg_extension(p, side));
+  }
+  return worst;
+}
+
+// Pelvis height: standing with the legs at 0.996 of their length. Walking, first the low level is
+// raised as far as the planted legs reach with at most kLimit of their length (knees bent at
+// least 7 degrees) keeping a bob of 6 % of the step length, then the high level as far as they
+// reach. Swinging legs do not bound it: their targets are drawn in (draw_in).
+Curve fit_pelvis_height(const Walk& w, const PoseWriter& writer) {
+  const FigureDimensions& dims = w.fig.dims;
+  const double leg = dims.leg_length();
+  const BodyPose stand = pose_at(w, 0, monotone_curve({{0, 0}}));
+  const double y_stand = root_height_for(writer, stand, 0.996, 0, dims.stature);
+  auto worst = [&](double low, double high) {
+    return worst_extension(w, writer, height_curve(w, y_stand, low, high));
+  };
+  const double bob = 0.06 * w.gait.step_length;
+  double lo = y_stand - 0.4 * leg, hi = y_stand;
+  if (worst(lo, lo + bob) > kLimit)
+    throw std::logic_error("synthesize_walk: the legs cannot reach the footprints");
+  for (int i = 0; i < 40; ++i) {
+    const double mid = (lo + hi) / 2;
+    (worst(mid, mid + bob) <= kLimit ? lo : hi) = mid;
+  }
+  const double low = lo;
+  lo = low + bob;
+  hi = y_stand;
+  for (int i = 0; i < 40; ++i) {
+    const double mid = (lo + hi) / 2;
+    (worst(low, mid) <= kLimit ? lo : hi) = mid;
+  }
+  return height_curve(w, y_stand, low, lo);
+}
+
+// Plants: heel from strike to heel off, ankle from foot flat to heel off, ball and toe tip from
+// foot flat to toe off.
+void record_plants(const Walk& w, const FootGeometry& geo, double fps, int frames,
+                   std::vector<FootPlant>& out) {
+  PlantRecorder plants(w.fig, fps, frames, out);
+  for (Side side : {kLeft, kRight}) {
+    for (const Footprint& p : w.feet[side].prints()) {
+      const Eigen::Vector3d ball = geo.ball_when_flat(p.ankle, p.yaw);
+      const double flat = std::max(p.flat, 0.0);
+      plants.add(side, FootPoint::Heel, std::max(p.strike, 0.0), p.heel_off,
+                 geo.heel_when_flat(p.ankle, p.yaw));
+      plants.add(side, FootPoint::Ankle, flat, p.heel_off, p.ankle);
+      plants.add(side, FootPoint::Ball, flat, p.toe_off, ball);
+      plants.add(side, FootPoint::Toe, flat, p.toe_off, ball + rot_y(p.yaw) * w.fig.toe_tip_local);
+    }
+  }
+}
+
 }  // namespace
 
 GaitParameters gait_from_speed(double speed, double stature) {
@@ -165,229 +453,42 @@ std::string FootPlant::name() const {
 }
 
 Synthesis synthesize_walk(const WalkOptions& options) {
-  check_range("walk", "steps", options.steps, kStepsRange.min, kStepsRange.max, "");
-  check_range("walk", "speed", options.speed, kSpeedRange.min, kSpeedRange.max, "m/s");
-  check_range("walk", "stature", options.stature, kStatureRange.min, kStatureRange.max, "m");
-  check_range("walk", "fps", options.fps, kFpsRange.min, kFpsRange.max, "frames/s");
-
+  check_options(options);
   Synthesis out;
   out.figure = make_figure(options.stature);
   const Figure& fig = out.figure;
-  const FigureDimensions& dims = fig.dims;
-  const double H = dims.stature;
-  const GaitParameters gait = gait_from_speed(options.speed, options.stature);
-  out.gait = gait;
+  const double H = fig.dims.stature;
+  out.gait = gait_from_speed(options.speed, options.stature);
+  const GaitParameters& gait = out.gait;
   const FootGeometry geo(fig);
   PoseWriter writer(fig);
 
-  const int n = options.steps;
-  const double v = gait.speed, T = gait.step_time, L = gait.step_length;
-  const double stance = gait.stance_time(), swing = gait.swing_time(), dsupport = gait.double_support_time();
-  // Timeline: stand still, then the pelvis accelerates over one step time to `speed` as the first
-  // (right) heel strikes; steps follow every T; the closing step lands as the pelvis stops.
-  const double start = 0.35;
-  std::vector<double> strike(static_cast<std::size_t>(n) + 1);  // strike[k], k = 1..n
-  for (int k = 1; k <= n; ++k) strike[static_cast<std::size_t>(k)] = start + k * T;
-  const double stop = strike[static_cast<std::size_t>(n)];
-  const double settle = stop + 0.3;
-  const double end = stop + 0.6;
-  auto step_side = [](int k) { return k % 2 == 1 ? kRight : kLeft; };
-  auto step_z = [&](int k) { return std::min(k, n - 1) * L; };
-
-  // Footprints.
-  const double foot_x = 0.035 * H, toe_out = 0.1;
-  const double strike_pitch = -std::clamp(0.18 + 0.1 * v, 0.2, 0.4);
-  const double off_pitch = std::clamp(0.5 + 0.2 * v, 0.6, 0.95);
-  const double rocker = 0.12 * stance, heel_rise = 0.4 * stance;
-  std::array<std::vector<Footprint>, 2> prints;
-  for (Side side : {kLeft, kRight}) {
-    Footprint p;
-    p.ankle = Eigen::Vector3d(side_sign(side) * foot_x, dims.ankle_height, 0);
-    p.yaw = side_sign(side) * toe_out;
-    prints[side].push_back(p);
-  }
-  for (int k = 1; k <= n; ++k) {
-    const Side side = step_side(k);
-    Footprint p;
-    p.ankle = Eigen::Vector3d(side_sign(side) * foot_x, dims.ankle_height, step_z(k));
-    p.yaw = side_sign(side) * toe_out;
-    p.strike = strike[static_cast<std::size_t>(k)];
-    p.flat = p.strike + rocker;
-    p.strike_pitch = k == n ? 0.6 * strike_pitch : strike_pitch;
-    Footprint& prev = prints[side].back();
-    prev.toe_off = p.strike - swing;
-    prev.heel_off = std::max(prev.toe_off - heel_rise, std::isfinite(prev.flat) ? prev.flat + 0.02 : 0.1);
-    prev.off_pitch = off_pitch;
-    prev.off_rate = 2 * off_pitch / (prev.toe_off - prev.heel_off);
-    prints[side].push_back(p);
-  }
+  const WalkTimeline timeline = plan_timeline(options.steps, gait);
+  const std::array<std::vector<Footprint>, 2> prints = place_footprints(fig.dims, gait, timeline);
   const double clearance = 0.015 * H / 1.75;
   const std::array<FootTrack, 2> feet{FootTrack(geo, prints[kLeft], clearance),
                                       FootTrack(geo, prints[kRight], clearance)};
+  const double z_bias = 0.02 * H;
+  const Walk walk{fig,
+                  gait,
+                  timeline,
+                  feet,
+                  z_bias,
+                  forward_progress(timeline, gait, z_bias),
+                  pelvis_curves(timeline, gait, H),
+                  arm_curves(timeline, gait)};
+  const Curve height = fit_pelvis_height(walk, writer);
 
-  // Pelvis: forward progress (exactly `speed` from the first to the last full step), sway over the
-  // stance foot at mid-swing, rotation forward on the side of the landing foot, list down on the
-  // swing side, anterior tilt; the trunk counter-rotates, the arms swing against the legs.
-  const double z_bias = 0.02 * H;  // hips slightly ahead of the ankles, as when standing
-  Curve z;
-  z.add_hold(0, start, z_bias);
-  z.add_quintic(start, strike[1], z_bias, 0, 0, z_bias + 0.5 * L, v, 0);
-  if (n > 2)
-    z.add_poly(strike[1], strike[static_cast<std::size_t>(n - 1)], {z_bias + 0.5 * L, v, 0, 0, 0, 0});
-  z.add_quintic(strike[static_cast<std::size_t>(n - 1)], stop, z_bias + (n - 1.5) * L, v, 0,
-                z_bias + (n - 1) * L, 0, 0);
-  z.add_hold(stop, end, z_bias + (n - 1) * L);
-
-  const double speed_scale = std::clamp(v / 1.3, 0.4, 1.5);
-  const double sway = 0.0125 * H * std::min(std::sqrt(1.3 / v), 1.3);
-  const double yaw_amp = 0.07 * speed_scale, list_amp = 0.06 * speed_scale;
-  const double arm_amp = 0.28 * speed_scale, arm_mean = -0.05;
-  const double tilt_stand = 0.03, tilt_walk = 0.03 + 0.03 * v;
-  const double lean_stand = 0.0, lean_walk = 0.02 + 0.02 * v;
-  std::vector<std::pair<double, double>> kx{{0.1, 0}}, kyaw{{start, 0}}, kroll{{start, 0}};
-  std::vector<std::pair<double, double>> kpitch{{start, tilt_stand}}, klean{{start, lean_stand}};
-  std::array<std::vector<std::pair<double, double>>, 2> kflex, kelbow;
-  for (Side side : {kLeft, kRight}) {
-    kflex[side] = {{start, 0}};
-    kelbow[side] = {{start, 0.1}};
-  }
-  for (int k = 1; k <= n; ++k) {
-    const Side side = step_side(k);
-    const double sgn = side == kRight ? 1.0 : -1.0;  // right heel strike: right hip forward
-    const double t = strike[static_cast<std::size_t>(k)];
-    const double mid_swing = t - swing / 2;
-    const double scale = k == n ? 0.4 : 1.0;  // the closing step is a small one
-    kx.push_back({mid_swing, -side_sign(side) * sway * scale});
-    kroll.push_back({mid_swing, sgn * list_amp * scale});
-    kyaw.push_back({t, sgn * yaw_amp * scale});
-    const Side other = side == kLeft ? kRight : kLeft;
-    kflex[side].push_back({t, (arm_mean - arm_amp) * scale});
-    kflex[other].push_back({t, (arm_mean + arm_amp) * scale});
-    kelbow[side].push_back({t, 0.2});
-    kelbow[other].push_back({t, 0.2 + 0.3 * speed_scale * scale});
-  }
-  if (n > 1) {
-    kpitch.push_back({strike[1], tilt_walk});
-    klean.push_back({strike[1], lean_walk});
-  }
-  if (n > 2) {
-    kpitch.push_back({strike[static_cast<std::size_t>(n - 1)], tilt_walk});
-    klean.push_back({strike[static_cast<std::size_t>(n - 1)], lean_walk});
-  }
-  for (auto* keys : {&kx, &kyaw, &kroll}) keys->push_back({settle, 0});
-  kpitch.push_back({settle, tilt_stand});
-  klean.push_back({settle, lean_stand});
-  for (Side side : {kLeft, kRight}) {
-    kflex[side].push_back({stop + 0.45, 0});
-    kelbow[side].push_back({stop + 0.45, 0.1});
-  }
-  const Curve x = monotone_curve(kx), yaw = monotone_curve(kyaw), roll = monotone_curve(kroll);
-  const Curve pitch = monotone_curve(kpitch), lean = monotone_curve(klean);
-  const std::array<Curve, 2> flex{monotone_curve(kflex[kLeft]), monotone_curve(kflex[kRight])};
-  const std::array<Curve, 2> elbow{monotone_curve(kelbow[kLeft]), monotone_curve(kelbow[kRight])};
-
-  // A swinging foot's target drawn towards the hip where it would stretch the leg past `limit`
-  // (just after toe off, when the hips run ahead), saturating smoothly (tanh: C2) below the IK's
-  // reach. The planted feet never exceed `limit` (the pelvis height search sees to it), so the
-  // swing starts and ends untouched.
-  const double limit = 0.998, reach = 0.999 * dims.leg_length(), soft = limit * dims.leg_length();
-  auto draw_in = [&](BodyPose& p, Side side) {
-    const Eigen::Vector3d hip = p.root + p.pelvis * fig.skeleton->joint(fig.up_leg[side]).offset;
-    const Eigen::Vector3d d = p.feet[side].ankle - hip;
-    const double D = d.norm();
-    if (D <= soft) return;
-    p.feet[side].ankle = hip + d * ((soft + (reach - soft) * std::tanh((D - soft) / (reach - soft))) / D);
-  };
-  auto pose_at = [&](double t, const Curve& height) {
-    BodyPose p;
-    p.root = Eigen::Vector3d(x.value(t), height.value(t), z.value(t));
-    const double yw = yaw.value(t);
-    p.pelvis = rot_y(yw) * rot_z(roll.value(t)) * rot_x(pitch.value(t));
-    p.chest = rot_y(-0.6 * yw) * rot_x(lean.value(t));
-    p.head = rot_x(0.02);
-    for (Side side : {kLeft, kRight}) {
-      p.arms[side] = {0.1, flex[side].value(t), elbow[side].value(t)};
-      p.feet[side] = feet[side].at(t);
-      if (!feet[side].on_floor(t)) draw_in(p, side);
-    }
-    return p;
-  };
-
-  // Pelvis height: standing with the legs at 0.996 of their length. Walking, low in the middle of
-  // each double support and high in single support as the pelvis passes over the stance ankle;
-  // first the low level is raised as far as the planted legs reach with at most 0.998 of their
-  // length (knees bent at least 7 degrees) keeping a bob of 6 % of the step length, then the high
-  // level as far as they reach. Swinging legs do not bound it: their targets are drawn in (below).
-  const double leg = dims.leg_length();
-  const BodyPose stand = pose_at(0, monotone_curve({{0, 0}}));
-  const double y_stand = root_height_for(writer, stand, 0.996, 0, dims.stature);
-  auto height_curve = [&](double low, double high) {
-    high = std::min(high, y_stand);
-    std::vector<std::pair<double, double>> keys{{start, y_stand}, {strike[1] - swing, high}};
-    for (int k = 1; k < n; ++k) {
-      const double t = strike[static_cast<std::size_t>(k)];
-      keys.push_back({t + dsupport / 2, low});
-      if (k + 1 < n) {
-        const double over_ankle = t + (0.5 * L - z_bias) / v;  // pelvis above the stance ankle
-        keys.push_back({std::clamp(over_ankle, t + dsupport, t + T - 0.5 * dsupport), high});
-      }
-    }
-    keys.push_back({settle, y_stand});
-    return monotone_curve(keys);
-  };
-  const int frames = static_cast<int>(std::lround(end * options.fps)) + 1;
-  // Sampled at a fixed rate, not at `fps`, so every frame rate gets the same curves.
-  const double search_rate = 240;
-  const int search_samples = static_cast<int>(std::ceil(end * search_rate)) + 1;
-  auto worst_extension = [&](const Curve& height) {
-    double worst = 0;
-    for (int i = 0; i < search_samples; ++i) {
-      const double t = std::min(i / search_rate, end);
-      const BodyPose p = pose_at(t, height);
-      for (Side side : {kLeft, kRight})
-        if (feet[side].on_floor(t)) worst = std::max(worst, writer.leg_extension(p, side));
-    }
-    return worst;
-  };
-  const double bob = 0.06 * L;
-  double lo = y_stand - 0.4 * leg, hi = y_stand;
-  if (worst_extension(height_curve(lo, lo + bob)) > limit)
-    throw std::logic_error("synthesize_walk: the legs cannot reach the footprints");
-  for (int i = 0; i < 40; ++i) {
-    const double mid = (lo + hi) / 2;
-    (worst_extension(height_curve(mid, mid + bob)) <= limit ? lo : hi) = mid;
-  }
-  const double low = lo;
-  lo = low + bob;
-  hi = y_stand;
-  for (int i = 0; i < 40; ++i) {
-    const double mid = (lo + hi) / 2;
-    (worst_extension(height_curve(low, mid)) <= limit ? lo : hi) = mid;
-  }
-  const Curve height = height_curve(low, lo);
-
+  const int frames = static_cast<int>(std::lround(timeline.end * options.fps)) + 1;
   out.max_leg_extension = write_frames(
-      writer, fig, [&](double t) { return pose_at(t, height); }, frames, options.fps, "synth_walk",
+      writer, fig, [&](double t) { return pose_at(walk, t, height); }, frames, options.fps, "synth_walk",
       out.motion);
-
-  // Plants: heel from strike to heel off, ankle from foot flat to heel off, ball and toe tip from
-  // foot flat to toe off.
-  PlantRecorder plants(fig, options.fps, frames, out.plants);
-  for (Side side : {kLeft, kRight}) {
-    for (const Footprint& p : feet[side].prints()) {
-      const Eigen::Vector3d ball = geo.ball_when_flat(p.ankle, p.yaw);
-      const double flat = std::max(p.flat, 0.0);
-      plants.add(side, FootPoint::Heel, std::max(p.strike, 0.0), p.heel_off,
-                 geo.heel_when_flat(p.ankle, p.yaw));
-      plants.add(side, FootPoint::Ankle, flat, p.heel_off, p.ankle);
-      plants.add(side, FootPoint::Ball, flat, p.toe_off, ball);
-      plants.add(side, FootPoint::Toe, flat, p.toe_off, ball + rot_y(p.yaw) * fig.toe_tip_local);
-    }
-  }
+  record_plants(walk, geo, options.fps, frames, out.plants);
+  const int n = options.steps;
   out.steps = n;
   if (n >= 3) {
-    out.steady_start = strike[1];
-    out.steady_end = strike[static_cast<std::size_t>(n - 1)];
+    out.steady_start = timeline.strike[1];
+    out.steady_end = timeline.strike[static_cast<std::size_t>(n - 1)];
   }
   return out;
 }
