@@ -10,7 +10,7 @@
 //   r.check_keys(top, "the target file", {"version", "bones"});
 //   r.check_version(top);
 //
-// Users link yaml-cpp themselves (kg::graph keeps it private).
+// kg::base links yaml-cpp publicly: this header is over its nodes.
 #pragma once
 
 #include <string>
