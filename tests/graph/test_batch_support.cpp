@@ -249,6 +249,27 @@ TEST_CASE("Sha256 gives the same digest however the bytes are split into update 
   }
 }
 
+TEST_CASE("a copied Sha256 goes on from the bytes hashed so far; a moved one is the same hash") {
+  Sha256 ab;
+  ab.update("ab");
+  Sha256 abc = ab;  // the copy's state is its own
+  abc.update("c");
+  ab.update("d");
+  CHECK(abc.hex() == "ba7816bf8f01cfea414140de5dae2223b00361a396177a9cb410ff61f20015ad");
+  CHECK(ab.hex() == sha256_hex("abd"));
+  Sha256 a;
+  a.update("a");
+  Sha256 moved = std::move(a);
+  moved.update("bc");
+  CHECK(moved.hex() == sha256_hex("abc"));
+  Sha256 assigned;
+  assigned.update("unrelated");
+  Sha256 source;
+  source.update("abc");
+  assigned = source;
+  CHECK(assigned.hex() == sha256_hex("abc"));
+}
+
 TEST_CASE("sha256_file hashes a file's bytes and names a file it cannot read") {
   TempDir dir;
   // Over 64 KiB, not a multiple of the read block, with NUL and 0xff bytes.
