@@ -1,144 +1,167 @@
-#include <algorithm>
 #include "kg/base/json.hpp"
 
+#include <nlohmann/json.hpp>
+
 #include <cmath>
+#include <stdexcept>
 
 #include "kg/base/text.hpp"
 
 namespace kg {
+namespace {
 
-std::string json_quote(std::string_view text) {
-  static const char* hex = "0123456789abcdef";
-  std::string out;
-  out.reserve(text.size() + 2);
-  out += '"';
-  for (char ch : text) {
-    const auto c = static_cast<unsigned char>(ch);
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\b':
-        out += "\\b";
-        break;
-      case '\f':
-        out += "\\f";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\r':
-        out += "\\r";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (c < 0x20 || c == 0x7f) {
-          out += "\\u00";
-          out += hex[c >> 4];
-          out += hex[c & 0xf];
-        } else {
-          out += ch;  // UTF-8 passes through unchanged
-        }
-    }
-  }
-  out += '"';
-  return out;
+using Json = nlohmann::ordered_json;
+
+// A string, integer, boolean or null as nlohmann writes it; bytes that are not UTF-8 as U+FFFD.
+std::string scalar_text(const Json& j) {
+  return j.dump(-1, ' ', false, Json::error_handler_t::replace);
 }
 
-void JsonWriter::newline() {
-  if (indent_ <= 0) return;
-  os_ << '\n';
-  for (std::size_t i = 0; i < first_.size() * static_cast<std::size_t>(indent_); ++i) os_ << ' ';
+std::string number_text(double x) {
+  return std::isfinite(x) ? text::format_double(x) : "null";
 }
 
-// Separators and indentation before a value, a key or a container's start.
-void JsonWriter::before_value() {
-  if (after_key_) {
-    after_key_ = false;
+void newline(std::string& out, int indent, int depth) {
+  if (indent <= 0) return;
+  out += '\n';
+  out.append(static_cast<std::size_t>(indent) * static_cast<std::size_t>(depth), ' ');
+}
+
+// nlohmann's dump(indent) layout, with number_text for doubles.
+void print(std::string& out, const Json& j, int indent, int depth) {
+  if (j.is_number_float()) {
+    out += number_text(j.get<double>());
     return;
   }
-  if (first_.empty()) return;
-  if (!first_.back()) os_ << ',';
-  first_.back() = false;
-  newline();
+  if (!j.is_structured()) {
+    out += scalar_text(j);
+    return;
+  }
+  const bool object = j.is_object();
+  if (j.empty()) {
+    out += object ? "{}" : "[]";
+    return;
+  }
+  out += object ? '{' : '[';
+  bool first = true;
+  for (auto it = j.begin(); it != j.end(); ++it) {
+    if (!first) out += ',';
+    first = false;
+    newline(out, indent, depth + 1);
+    if (object) {
+      out += scalar_text(Json(it.key()));
+      out += indent > 0 ? ": " : ":";
+    }
+    print(out, it.value(), indent, depth + 1);
+  }
+  newline(out, indent, depth);
+  out += object ? '}' : ']';
 }
 
+}  // namespace
+
+struct JsonWriter::Document {
+  Json root;
+  std::vector<Json*> open;         // containers begun and not yet ended, outermost first
+  std::optional<std::string> key;  // given by key(), taken by the next value
+
+  // Places `value` in the innermost open container (or as the root); returns where it went.
+  Json& add(Json value) {
+    if (open.empty()) {
+      root = std::move(value);
+      return root;
+    }
+    Json& parent = *open.back();
+    if (parent.is_array()) {
+      parent.push_back(std::move(value));
+      return parent.back();
+    }
+    if (!key) throw std::logic_error("JsonWriter: a value inside an object needs its key first");
+    auto& members = parent.get_ref<Json::object_t&>();
+    auto [it, fresh] = members.emplace(std::move(*key), std::move(value));
+    key.reset();
+    if (!fresh) throw std::logic_error("JsonWriter: key \"" + it->first + "\" written twice in one object");
+    return it->second;
+  }
+
+  void begin(Json container) { open.push_back(&add(std::move(container))); }
+
+  void end(bool object, std::ostream& os, int indent) {
+    if (open.empty() || open.back()->is_object() != object || key)
+      throw std::logic_error(object ? "JsonWriter: end_object without its begin_object"
+                                    : "JsonWriter: end_array without its begin_array");
+    open.pop_back();
+    if (open.empty()) write(os, indent);
+  }
+
+  void scalar(Json value, std::ostream& os, int indent) {
+    add(std::move(value));
+    if (open.empty()) write(os, indent);
+  }
+
+  // The finished document; a container at the top ends its line when pretty-printed.
+  void write(std::ostream& os, int indent) {
+    std::string text;
+    print(text, root, indent, 0);
+    if (root.is_structured() && indent > 0) text += '\n';
+    os << text;
+    root = nullptr;
+  }
+};
+
+JsonWriter::JsonWriter(std::ostream& os, int indent)
+    : os_(os), indent_(indent), doc_(std::make_unique<Document>()) {}
+
+JsonWriter::~JsonWriter() = default;
+
 void JsonWriter::begin_object() {
-  before_value();
-  os_ << '{';
-  first_.push_back(true);
+  doc_->begin(Json::object());
 }
 
 void JsonWriter::end_object() {
-  const bool empty = first_.empty() || first_.back();
-  if (!first_.empty()) first_.pop_back();
-  if (!empty) newline();
-  os_ << '}';
-  if (first_.empty() && indent_ > 0) os_ << '\n';
+  doc_->end(true, os_, indent_);
 }
 
 void JsonWriter::begin_array() {
-  before_value();
-  os_ << '[';
-  first_.push_back(true);
+  doc_->begin(Json::array());
 }
 
 void JsonWriter::end_array() {
-  const bool empty = first_.empty() || first_.back();
-  if (!first_.empty()) first_.pop_back();
-  if (!empty) newline();
-  os_ << ']';
-  if (first_.empty() && indent_ > 0) os_ << '\n';
+  doc_->end(false, os_, indent_);
 }
 
 void JsonWriter::key(std::string_view name) {
-  before_value();
-  os_ << json_quote(name) << (indent_ > 0 ? ": " : ":");
-  after_key_ = true;
+  if (doc_->open.empty() || !doc_->open.back()->is_object() || doc_->key)
+    throw std::logic_error("JsonWriter: a key outside an object, or two keys in a row");
+  doc_->key = std::string(name);
 }
 
 void JsonWriter::value(std::string_view text) {
-  before_value();
-  os_ << json_quote(text);
+  doc_->scalar(Json(std::string(text)), os_, indent_);
 }
 
 void JsonWriter::value(double number) {
-  before_value();
-  if (!std::isfinite(number)) {
-    os_ << "null";
-    return;
-  }
-  char buf[64];
-  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, number);
-  os_.write(buf, end - buf);
-  // A whole double keeps a fraction ("2.0"), so that a reader tells it from an integer.
-  if (std::find_if(buf, end, [](char c) { return c == '.' || c == 'e'; }) == end) os_ << ".0";
+  doc_->scalar(Json(number), os_, indent_);
 }
 
 void JsonWriter::value(std::int64_t number) {
-  before_value();
-  os_ << number;
+  doc_->scalar(Json(number), os_, indent_);
 }
 
 void JsonWriter::value(bool flag) {
-  before_value();
-  os_ << (flag ? "true" : "false");
+  doc_->scalar(Json(flag), os_, indent_);
 }
 
 void JsonWriter::value(const std::vector<double>& numbers) {
-  begin_array();
-  for (double x : numbers) value(x);
-  end_array();
+  doc_->scalar(Json(numbers), os_, indent_);
 }
 
 void JsonWriter::null() {
-  before_value();
-  os_ << "null";
+  doc_->scalar(Json(nullptr), os_, indent_);
+}
+
+std::string json_quote(std::string_view text) {
+  return scalar_text(Json(std::string(text)));
 }
 
 }  // namespace kg

@@ -1,8 +1,10 @@
 #include "kg/graph/manifest.hpp"
 
-#include <yaml-cpp/yaml.h>
+#include <nlohmann/json.hpp>
 
 #include <algorithm>
+#include <cerrno>
+#include <cstring>
 #include <ctime>
 #include <fstream>
 #include <limits>
@@ -18,48 +20,70 @@ namespace kg::graph {
 namespace {
 
 namespace fs = std::filesystem;
+using Json = nlohmann::ordered_json;  // ordered: figures keep the order they were written in
 
-std::string text_field(const YAML::Node& object, const char* key, bool required = true) {
-  const YAML::Node value = object[key];
+const Json* member(const Json& object, const char* key) {
+  const auto it = object.find(key);
+  return it == object.end() ? nullptr : &*it;
+}
+
+std::string text_field(const Json& object, const char* key, bool required = true) {
+  const Json* value = member(object, key);
   if (!value) {
     if (required) throw std::runtime_error(std::string("no \"") + key + "\"");
     return {};
   }
-  if (!value.IsScalar()) throw std::runtime_error(std::string("\"") + key + "\" is not a string");
-  return value.Scalar();
+  if (!value->is_string()) throw std::runtime_error(std::string("\"") + key + "\" is not a string");
+  return value->get<std::string>();
 }
 
-double number_field(const YAML::Node& object, const char* key) {
-  const YAML::Node value = object[key];
-  if (!value || value.IsNull()) return 0;
-  return value.as<double>();
+double number_field(const Json& object, const char* key) {
+  const Json* value = member(object, key);
+  if (!value || value->is_null()) return 0;
+  if (!value->is_number()) throw std::runtime_error(std::string("\"") + key + "\" is not a number");
+  return value->get<double>();
 }
 
-// JSON read through YAML: a quoted scalar is a string; a plain one a bool, whole number or number.
-Figure figure_of(const YAML::Node& value) {
-  if (value.IsNull()) return std::numeric_limits<double>::quiet_NaN();  // the writer's non-finite number
-  if (!value.IsScalar()) throw std::runtime_error("a figure is not a single value");
-  const std::string& text = value.Scalar();
-  if (value.Tag() == "!") return text;
-  if (text == "true") return true;
-  if (text == "false") return false;
-  if (text.find_first_of(".eE") == std::string::npos) return value.as<std::int64_t>();
-  return value.as<double>();
+// As written: a whole number is an integer, one with a fraction or exponent a double, null the
+// writer's non-finite number.
+Figure figure_of(const Json& value) {
+  if (value.is_null()) return std::numeric_limits<double>::quiet_NaN();
+  if (value.is_string()) return value.get<std::string>();
+  if (value.is_boolean()) return value.get<bool>();
+  if (value.is_number_float()) return value.get<double>();
+  if (value.is_number_integer()) {
+    if (value.is_number_unsigned() &&
+        value.get<std::uint64_t>() > std::uint64_t(std::numeric_limits<std::int64_t>::max()))
+      throw std::runtime_error("a figure's whole number is too large");
+    return value.get<std::int64_t>();
+  }
+  throw std::runtime_error("a figure is not a single value");
 }
 
-std::vector<ManifestFile> files_field(const YAML::Node& object, const char* key) {
+std::vector<ManifestFile> files_field(const Json& object, const char* key) {
   std::vector<ManifestFile> files;
-  const YAML::Node list = object[key];
+  const Json* list = member(object, key);
   if (!list) return files;
-  if (!list.IsSequence()) throw std::runtime_error(std::string("\"") + key + "\" is not a list");
-  for (const YAML::Node& f : list) {
+  if (!list->is_array()) throw std::runtime_error(std::string("\"") + key + "\" is not a list");
+  for (const Json& f : *list) {
+    if (!f.is_object()) throw std::runtime_error(std::string("an entry of \"") + key + "\" is not an object");
     ManifestFile file;
     file.path = text_field(f, "path");
     file.sha256 = text_field(f, "sha256");
-    file.bytes = f["bytes"] ? f["bytes"].as<std::uintmax_t>() : 0;
+    if (const Json* bytes = member(f, "bytes")) {
+      if (!bytes->is_number_unsigned()) throw std::runtime_error("\"bytes\" is not a whole number");
+      file.bytes = bytes->get<std::uintmax_t>();
+    }
     files.push_back(std::move(file));
   }
   return files;
+}
+
+// nlohmann's parse error without its "[json.exception.parse_error.101] " prefix.
+std::string parse_problem(const nlohmann::json::parse_error& e) {
+  const std::string what = e.what();
+  const auto end = what.find("] ");
+  return end == std::string::npos ? what : what.substr(end + 2);
 }
 
 void write_files(JsonWriter& w, const char* key, const std::vector<ManifestFile>& files) {
@@ -75,8 +99,8 @@ void write_files(JsonWriter& w, const char* key, const std::vector<ManifestFile>
   w.end_array();
 }
 
-ManifestRecord record_of(const YAML::Node& object) {
-  if (!object.IsMap()) throw std::runtime_error("not a JSON object");
+ManifestRecord record_of(const Json& object) {
+  if (!object.is_object()) throw std::runtime_error("not a JSON object");
   ManifestRecord r;
   r.input = text_field(object, "input");
   r.stem = text_field(object, "stem");
@@ -90,9 +114,9 @@ ManifestRecord record_of(const YAML::Node& object) {
   r.log = text_field(object, "log", false);
   r.outputs = files_field(object, "outputs");
   r.reads = files_field(object, "reads");
-  if (const YAML::Node figures = object["figures"]) {
-    if (!figures.IsMap()) throw std::runtime_error("\"figures\" is not an object");
-    for (const auto& kv : figures) r.figures.emplace_back(kv.first.Scalar(), figure_of(kv.second));
+  if (const Json* figures = member(object, "figures")) {
+    if (!figures->is_object()) throw std::runtime_error("\"figures\" is not an object");
+    for (const auto& [key, value] : figures->items()) r.figures.emplace_back(key, figure_of(value));
   }
   r.input_sha256 = text_field(object, "input_sha256", false);
   r.graph_sha256 = text_field(object, "graph_sha256", false);
@@ -137,11 +161,13 @@ std::string manifest_line(const ManifestRecord& r) {
 }
 
 ManifestRecord parse_manifest_line(const std::string& line) {
+  Json object;
   try {
-    return record_of(YAML::Load(line));
-  } catch (const YAML::Exception& e) {
-    throw std::runtime_error(e.msg);
+    object = Json::parse(line);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw std::runtime_error("not a JSON object: " + parse_problem(e));
   }
+  return record_of(object);
 }
 
 std::vector<ManifestRecord> read_manifest(const fs::path& file, std::vector<std::string>& problems) {
@@ -204,7 +230,15 @@ void write_batch_identity(const fs::path& file, const BatchIdentity& identity) {
 
 BatchIdentity read_batch_identity(const fs::path& file) {
   try {
-    const YAML::Node object = YAML::LoadFile(file.string());
+    std::ifstream in(file, std::ios::binary);
+    if (!in) throw std::runtime_error(std::string("cannot open it: ") + std::strerror(errno));
+    Json object;
+    try {
+      object = Json::parse(in);
+    } catch (const nlohmann::json::parse_error& e) {
+      throw std::runtime_error(parse_problem(e));
+    }
+    if (!object.is_object()) throw std::runtime_error("not a JSON object");
     return {text_field(object, "graph"), text_field(object, "graph_sha256"),
             text_field(object, "settings_sha256")};
   } catch (const std::exception& e) {

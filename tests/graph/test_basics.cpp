@@ -265,7 +265,25 @@ TEST_CASE("JsonWriter writes nested structures and escapes strings") {
       R"({"s":"a\"b\\c\nd\te\u0001 )"
       "\xc3\xa9"
       R"(","n":3,"x":0.1,"big":-9007199254740993,"inf":null,"nan":null,"ok":false,"none":null,"list":[1.5,2.0,-1e+22,{},[]]})");
-  CHECK(json_quote("\x7f") == "\"\\u007f\"");
+  // nlohmann escapes what JSON requires (below 0x20) and passes DEL through; bytes that are not
+  // UTF-8 become U+FFFD, so the text is always valid JSON.
+  CHECK(json_quote("\x7f") == "\"\x7f\"");
+  CHECK(json_quote("a\xff") == "\"a\xef\xbf\xbd\"");
+}
+
+TEST_CASE("JsonWriter refuses a document it cannot write") {
+  std::ostringstream os;
+  JsonWriter w(os, 0);
+  w.begin_object();
+  CHECK_THROWS_AS(w.value(1), std::logic_error);  // no key
+  w.field("a", 1);
+  CHECK_THROWS_AS(w.field("a", 2), std::logic_error);
+  CHECK_THROWS_AS(w.end_array(), std::logic_error);
+  w.end_object();
+  CHECK(os.str() == R"({"a":1})");
+  CHECK_THROWS_AS(w.end_object(), std::logic_error);
+  w.value(2.0);  // a lone value at the top goes out at once
+  CHECK(os.str() == R"({"a":1}2.0)");
 }
 
 TEST_CASE("JsonWriter pretty-prints with an indent") {

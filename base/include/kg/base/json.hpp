@@ -1,10 +1,21 @@
-// A small streaming JSON writer (no DOM): reports, manifests and exported figures.
+// A JSON writer for reports, manifests and exported figures, over nlohmann-json: the calls build
+// an nlohmann::ordered_json (keys in the order written), and the text goes to the stream when the
+// outermost object or array ends (a lone top-level value: at once).
 //
 //   JsonWriter w(os);
 //   w.begin_object(); w.key("ok"); w.value(true); w.field("n", 3); w.end_object();
+//
+// The text: nlohmann's layout (indent 0: one line, no blanks; otherwise one member or element a
+// line, indented by that many spaces per level, "key": value, empty containers as {} and [], and
+// a newline after the outermost container), strings escaped by nlohmann (UTF-8 passes through;
+// bytes that are not UTF-8 become U+FFFD), integers as themselves, and doubles in the shortest
+// text that reads back to the same double (kg::text::format_double: "2.0" for a whole one,
+// std::to_chars otherwise), non-finite ones as null. nlohmann's own number text is not used: its
+// Grisu2 is not always the shortest, so a report's numbers would change in their last digit.
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <ostream>
 #include <string>
@@ -16,9 +27,15 @@ namespace kg {
 
 class JsonWriter {
  public:
-  // indent 0: one line; otherwise pretty-printed with that many spaces.
-  explicit JsonWriter(std::ostream& os, int indent = 2) : os_(os), indent_(indent) {}
+  // indent 0: one line; otherwise pretty-printed with that many spaces. `os` is not owned and must
+  // outlive the writer.
+  explicit JsonWriter(std::ostream& os, int indent = 2);
+  ~JsonWriter();
+  JsonWriter(const JsonWriter&) = delete;
+  JsonWriter& operator=(const JsonWriter&) = delete;
 
+  // Inside an object every value (a container too) follows its key(); a key written twice in one
+  // object, a value without its key or an end_* that does not match throws std::logic_error.
   void begin_object();
   void end_object();
   void begin_array();
@@ -57,15 +74,13 @@ class JsonWriter {
   }
 
  private:
-  void before_value();
-  void newline();
+  struct Document;  // the ordered_json being built and the containers still open
   std::ostream& os_;
   int indent_;
-  std::vector<bool> first_;  // per open container: no element written yet
-  bool after_key_ = false;
+  std::unique_ptr<Document> doc_;
 };
 
-// `text` as a JSON string literal, quotes included.
+// `text` as a JSON string literal, quotes included (nlohmann's escaping, as JsonWriter writes it).
 std::string json_quote(std::string_view text);
 
 }  // namespace kg
