@@ -75,7 +75,7 @@ int run(Host& host, const Options& o) {
 int dispatch(const Options& o, const char* argv0) {
   switch (o.verb) {
     case Verb::Help:
-      std::cout << usage_text();
+      std::cout << verb_usage_text(o.help_topic);
       return kExitOk;
     case Verb::Version:
       std::cout << "kinegraph " << KG_VERSION << " (plugin ABI " << graph::kPluginAbiVersion

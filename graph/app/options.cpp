@@ -1,6 +1,11 @@
 #include "options.hpp"
 
+#include <CLI/CLI.hpp>
+
+#include <algorithm>
 #include <charconv>
+#include <cstring>
+#include <iterator>
 #include <optional>
 
 #include "kg/base/error.hpp"
@@ -11,9 +16,16 @@ namespace {
 struct VerbName {
   const char* name;
   Verb verb;
+  const char* doc;  // the verb's line in its own --help
 };
-constexpr VerbName kVerbs[] = {{"run", Verb::Run}, {"validate", Verb::Validate}, {"nodes", Verb::Nodes},
-                               {"dot", Verb::Dot}, {"batch", Verb::Batch},       {"merge", Verb::Merge}};
+constexpr VerbName kVerbs[] = {
+    {"run", Verb::Run, "check GRAPH completely, then run it"},
+    {"validate", Verb::Validate,
+     "check GRAPH (node types, ports, port types, params, variables) without running it"},
+    {"nodes", Verb::Nodes, "list every node type: ports, params, defaults, ranges, choices, docs and origin"},
+    {"dot", Verb::Dot, "print GRAPH as Graphviz: kinegraph dot GRAPH | dot -Tsvg > graph.svg"},
+    {"batch", Verb::Batch, "run GRAPH once per input file, each item in its own process, with a manifest"},
+    {"merge", Verb::Merge, "merge the shard manifests in DIR into DIR/manifest.jsonl"}};
 
 const char* verb_name(Verb verb) {
   for (const VerbName& v : kVerbs) {
@@ -22,8 +34,10 @@ const char* verb_name(Verb verb) {
   return "";
 }
 
-bool takes_graph(Verb verb) {
-  return verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot || verb == Verb::Batch;
+// The positional a verb takes: GRAPH, merge's DIR, or none.
+const char* operand_of(Verb verb) {
+  if (verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot || verb == Verb::Batch) return "GRAPH";
+  return verb == Verb::Merge ? "DIR" : nullptr;
 }
 
 std::optional<int> whole_number(const std::string& text) {
@@ -53,6 +67,239 @@ Shard parse_shard(const std::string& text) {
   }
   return {*index, *count};
 }
+
+// A path option given once and not empty.
+void set_path_once(std::filesystem::path& field, const char* option, const std::string& value,
+                   const char* needs) {
+  if (!field.empty()) throw UsageError(std::string(option) + " is given twice");
+  if (value.empty()) throw UsageError(std::string(option) + " needs " + needs);
+  field = value;
+}
+
+void apply_set(Options& o, const std::string& setting) {
+  const auto eq = setting.find('=');
+  if (eq == std::string::npos || eq == 0) throw UsageError("--set expects NAME=VALUE, got '" + setting + "'");
+  const std::string key = setting.substr(0, eq);
+  if (!o.sets.emplace(key, setting.substr(eq + 1)).second)
+    throw UsageError("--set " + key + " is given twice");
+}
+
+void apply_jobs(Options& o, const std::string& value) {
+  if (o.jobs_given) throw UsageError("--jobs is given twice");
+  o.jobs = parse_count("--jobs", value, 1024);
+  o.jobs_given = true;
+}
+
+void apply_shard(Options& o, const std::string& value) {
+  if (o.shard) throw UsageError("--shard is given twice");
+  o.shard = parse_shard(value);
+}
+
+void apply_shards(Options& o, const std::string& value) {
+  if (o.shards) throw UsageError("--shards is given twice");
+  o.shards = parse_count("--shards", value, 10000);
+}
+
+void apply_sbatch(Options& o, const std::string& option) {
+  if (option.empty()) throw UsageError("--sbatch needs an sbatch option, e.g. --sbatch=--partition=short");
+  if (option.find('\n') != std::string::npos) throw UsageError("--sbatch option has a line break");
+  o.sbatch_options.push_back(option);
+}
+
+void apply_plugin_dir(Options& o, const std::string& dir) {
+  if (dir.empty()) throw UsageError("--plugin-dir needs a directory");
+  o.plugin_dirs.emplace_back(dir);
+}
+
+constexpr Verb kGraphVerbs[] = {Verb::Run, Verb::Validate, Verb::Dot, Verb::Batch};
+
+// An option of the command line: what it takes, the verbs it applies to, and what a value does.
+struct OptionSpec {
+  const char* name;        // "--jobs"
+  const char* short_name;  // "-j", or ""
+  const char* value;       // its value in the help ("N"); "" for a flag
+  const char* doc;
+  std::vector<Verb> verbs;
+  void (*apply)(Options&, const std::string& value);  // called per value, in the order given
+  bool list = false;                                  // takes every argument up to the next option (--inputs)
+};
+
+const std::vector<OptionSpec>& option_specs() {
+  using O = Options;
+  using S = const std::string&;
+  static const std::vector<OptionSpec> specs = {
+      {"--set",
+       "",
+       "NAME=VALUE",
+       "give the graph variable NAME a value (GRAPH documents its variables)",
+       {std::begin(kGraphVerbs), std::end(kGraphVerbs)},
+       apply_set},
+      {"--jobs",
+       "-j",
+       "N",
+       "run: independent branches on up to N threads (default 1); batch: items at once (default: the "
+       "cores this process may use; with --slurm, the CPUs of each array task, default 1)",
+       {Verb::Run, Verb::Batch},
+       apply_jobs},
+      {"--report",
+       "",
+       "FILE",
+       "write per-node status, wall times and reported figures as JSON to FILE",
+       {Verb::Run},
+       [](O& o, S v) { set_path_once(o.report, "--report", v, "a file name"); }},
+      {"--reproducible",
+       "",
+       "",
+       "files written come out byte for byte the same on every run and machine (no wall-clock times)",
+       {Verb::Run},
+       [](O& o, S) { o.reproducible = true; }},
+      {"--plugin-dir",
+       "",
+       "DIR",
+       "load every plugin (*.so) directly in DIR; may be repeated",
+       {Verb::Run, Verb::Validate, Verb::Nodes, Verb::Dot, Verb::Batch},
+       apply_plugin_dir},
+      {"--json", "", "", "print JSON instead of text", {Verb::Nodes}, [](O& o, S) { o.json = true; }},
+      {"--inputs",
+       "",
+       "PATTERN...",
+       "input files, as paths or patterns: * ? [..] within a folder name, ** for any depth of folders "
+       "(quoted); every argument up to the next option is a pattern",
+       {Verb::Batch},
+       [](O& o, S v) { o.inputs.push_back(v); },
+       true},
+      {"--input-list",
+       "",
+       "FILE",
+       "input files listed in FILE, one per line (with or without --inputs)",
+       {Verb::Batch},
+       [](O& o, S v) { set_path_once(o.input_list, "--input-list", v, "a file name"); }},
+      {"--out",
+       "",
+       "DIR",
+       "the folder of item outputs, logs and the manifest",
+       {Verb::Batch},
+       [](O& o, S v) { set_path_once(o.out, "--out", v, "a folder"); }},
+      {"--force", "", "", "redo items already done", {Verb::Batch}, [](O& o, S) { o.force = true; }},
+      {"--shard",
+       "",
+       "I/N",
+       "run only items I, I+N, I+2N, ... of the sorted inputs (0 <= I < N)",
+       {Verb::Batch},
+       apply_shard},
+      {"--slurm",
+       "",
+       "SCRIPT",
+       "write SCRIPT, an sbatch array job, and SCRIPT's merge job beside it",
+       {Verb::Batch},
+       [](O& o, S v) { set_path_once(o.slurm, "--slurm", v, "a script file name"); }},
+      {"--shards",
+       "",
+       "N",
+       "with --slurm: array tasks (default: one per 8 items, at most 100)",
+       {Verb::Batch},
+       apply_shards},
+      {"--sbatch",
+       "",
+       "OPTION",
+       "with --slurm: an #SBATCH line for both jobs (--sbatch=--partition=short)",
+       {Verb::Batch},
+       apply_sbatch},
+      {"--submit",
+       "",
+       "",
+       "with --slurm: submit the array, then the merge depending on it",
+       {Verb::Batch},
+       [](O& o, S) { o.submit = true; }},
+  };
+  return specs;
+}
+
+bool applies(const OptionSpec& spec, Verb verb) {
+  return std::find(spec.verbs.begin(), spec.verbs.end(), verb) != spec.verbs.end();
+}
+
+CLI::Option* add_option(CLI::App& app, const OptionSpec& spec) {
+  const std::string names = *spec.short_name ? std::string(spec.short_name) + "," + spec.name : spec.name;
+  CLI::Option* option = *spec.value ? app.add_option(names) : app.add_flag(names);
+  option->description(spec.doc)->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  if (*spec.value) option->type_name(spec.value);
+  if (spec.list) option->expected(1, -1)->allow_extra_args();
+  return option;
+}
+
+// A verb's --help as CLI11 lays it out, but for the usage line: CLI11 2.1 would also show the
+// hidden catch-all positional there.
+class VerbHelp : public CLI::Formatter {
+ public:
+  std::string make_usage(const CLI::App* app, std::string name) const override {
+    std::string usage = get_label("Usage") + ": " + name;
+    for (const CLI::Option* operand : app->get_options(
+             [](const CLI::Option* o) { return o->get_positional() && !o->get_group().empty(); }))
+      usage += " " + operand->get_name();
+    if (!app->get_options([](const CLI::Option* o) { return o->nonpositional() && !o->get_group().empty(); })
+             .empty())
+      usage += " [OPTIONS]";
+    return usage + "\n";
+  }
+};
+
+// The command line as CLI11 sees it: a subcommand per verb with the options that apply to it and
+// its positional. Every option is also on the top level, hidden, where the subcommands fall
+// through to: so options may come before the verb, and one given to a verb it does not apply to
+// is recognised, to be refused by name.
+struct CommandLine {
+  CLI::App app{"kinegraph: runs Kinegraph node graphs", "kinegraph"};
+  CLI::Option* help = nullptr;
+  CLI::Option* version = nullptr;
+  struct Verbs {
+    Verb verb;
+    CLI::App* app;
+    std::string operand;  // its GRAPH or DIR
+    CLI::Option* operand_option = nullptr;
+    std::vector<std::string> extra;     // arguments beyond it
+    std::vector<CLI::Option*> options;  // per option_specs(): nullptr when it does not apply
+  };
+  std::vector<Verbs> verbs;       // kVerbs, then help; reserved: CLI11 holds references into them
+  std::vector<CLI::Option*> top;  // per option_specs(), on the top level
+
+  CommandLine() {
+    app.set_help_flag();
+    app.allow_extras();            // unknown options and arguments are named by parse_options
+    app.require_subcommand(0, 1);  // a verb's argument named like a verb is an argument
+    help = app.add_flag("-h,--help")->group("");
+    version = app.add_flag("--version")->group("");
+    for (const OptionSpec& spec : option_specs()) top.push_back(add_option(app, spec)->group(""));
+    verbs.reserve(std::size(kVerbs) + 1);
+    for (const VerbName& v : kVerbs) add_verb(v.verb, v.name, v.doc);
+    add_verb(Verb::Help, "help", "");
+    verbs.back().app->group("");
+  }
+
+  void add_verb(Verb verb, const char* name, const char* doc) {
+    CLI::App* sub = app.add_subcommand(name, doc);
+    sub->fallthrough();
+    sub->formatter(std::make_shared<VerbHelp>());
+    sub->footer("Plugin search order and exit codes: kinegraph --help");
+    Verbs& v = verbs.emplace_back(Verbs{verb, sub, {}, nullptr, {}, {}});
+    if (const char* operand = operand_of(verb)) {
+      v.operand_option = sub->add_option(operand, v.operand,
+                                         verb == Verb::Merge ? "the batch's folder" : "the graph file (YAML)")
+                             ->type_name("");
+    }
+    sub->add_option("extra", v.extra)->group("");
+    sub->add_flag("-h,--help")->group("");
+    for (const OptionSpec& spec : option_specs())
+      v.options.push_back(applies(spec, verb) ? add_option(*sub, spec) : nullptr);
+  }
+
+  const Verbs* given_verb() const {
+    for (const Verbs& v : verbs) {
+      if (v.app->parsed()) return &v;
+    }
+    return nullptr;
+  }
+};
 
 }  // namespace
 
@@ -139,185 +386,159 @@ Messages go to stderr; `nodes` and `dot` write to stdout.
 )";
 }
 
-Options parse_options(int argc, const char* const* argv) {
-  Options o;
-  std::optional<Verb> verb;
-  bool help = false, version = false;
-  std::vector<std::string> positionals;
-  // Options given, with the verbs they apply to: checked once the verb is known.
-  std::vector<std::pair<std::string, std::vector<Verb>>> given;
+namespace {
 
+// The arguments after the program, in the reverse order CLI11 parses them from. Two forms CLI11
+// 2.1 reads otherwise than Kinegraph always has: `--name=` (an empty value) would be `--name` with
+// its value still to come, so it is split into `--name` and "", and the option refuses the empty
+// value as before; `--flag=VALUE` would set or clear the flag, so it is refused.
+std::vector<std::string> arguments_of(int argc, const char* const* argv) {
+  std::vector<std::string> args;
+  bool options_end = false;  // after "--" every argument is a positional
   for (int i = 1; i < argc; ++i) {
-    std::string arg = argv[i];
-    if (arg == "--") {
-      for (++i; i < argc; ++i) positionals.emplace_back(argv[i]);
-      break;
-    }
-    if (arg.size() < 2 || arg[0] != '-') {
-      positionals.push_back(arg);
-      continue;
-    }
-    std::string name = arg, value;
-    bool has_value = false;
-    if (auto eq = arg.find('='); arg.rfind("--", 0) == 0 && eq != std::string::npos) {
-      name = arg.substr(0, eq);
-      value = arg.substr(eq + 1);
-      has_value = true;
-    }
-    auto take_value = [&]() -> std::string {
-      if (has_value) return value;
-      if (i + 1 >= argc) throw UsageError(name + " needs a value");
-      return argv[++i];
-    };
-    if (name == "--help" || name == "-h") {
-      help = true;
-    } else if (name == "--version") {
-      version = true;
-    } else if (name == "--set") {
-      const std::string setting = take_value();
-      const auto eq = setting.find('=');
-      if (eq == std::string::npos || eq == 0) {
-        throw UsageError("--set expects NAME=VALUE, got '" + setting + "'");
-      }
-      const std::string key = setting.substr(0, eq);
-      if (!o.sets.emplace(key, setting.substr(eq + 1)).second) {
-        throw UsageError("--set " + key + " is given twice");
-      }
-      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Dot, Verb::Batch}});
-    } else if (name == "--jobs" || name == "-j") {
-      if (o.jobs_given) throw UsageError("--jobs is given twice");
-      o.jobs = parse_count("--jobs", take_value(), 1024);
-      o.jobs_given = true;
-      given.push_back({"--jobs", {Verb::Run, Verb::Batch}});
-    } else if (name == "--reproducible") {
-      if (has_value) throw UsageError("--reproducible takes no value");
-      o.reproducible = true;
-      given.push_back({name, {Verb::Run}});
-    } else if (name == "--inputs") {
-      if (has_value) {
-        o.inputs.push_back(value);
-      } else {
-        // Up to the next option: anything starting with '-' but a lone "-".
-        for (; i + 1 < argc && (argv[i + 1][0] != '-' || argv[i + 1][1] == 0); ++i)
-          o.inputs.emplace_back(argv[i + 1]);
-      }
-      if (o.inputs.empty()) throw UsageError("--inputs needs at least one file or pattern");
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--input-list") {
-      if (!o.input_list.empty()) throw UsageError("--input-list is given twice");
-      o.input_list = take_value();
-      if (o.input_list.empty()) throw UsageError("--input-list needs a file name");
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--out") {
-      if (!o.out.empty()) throw UsageError("--out is given twice");
-      o.out = take_value();
-      if (o.out.empty()) throw UsageError("--out needs a folder");
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--force") {
-      if (has_value) throw UsageError("--force takes no value");
-      o.force = true;
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--shard") {
-      if (o.shard) throw UsageError("--shard is given twice");
-      o.shard = parse_shard(take_value());
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--slurm") {
-      if (!o.slurm.empty()) throw UsageError("--slurm is given twice");
-      o.slurm = take_value();
-      if (o.slurm.empty()) throw UsageError("--slurm needs a script file name");
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--shards") {
-      if (o.shards) throw UsageError("--shards is given twice");
-      o.shards = parse_count("--shards", take_value(), 10000);
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--sbatch") {
-      const std::string option = take_value();
-      if (option.empty())
-        throw UsageError("--sbatch needs an sbatch option, e.g. --sbatch=--partition=short");
-      if (option.find('\n') != std::string::npos) throw UsageError("--sbatch option has a line break");
-      o.sbatch_options.push_back(option);
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--submit") {
-      if (has_value) throw UsageError("--submit takes no value");
-      o.submit = true;
-      given.push_back({name, {Verb::Batch}});
-    } else if (name == "--report") {
-      if (!o.report.empty()) throw UsageError("--report is given twice");
-      o.report = take_value();
-      if (o.report.empty()) throw UsageError("--report needs a file name");
-      given.push_back({name, {Verb::Run}});
-    } else if (name == "--plugin-dir") {
-      const std::string dir = take_value();
-      if (dir.empty()) throw UsageError("--plugin-dir needs a directory");
-      o.plugin_dirs.emplace_back(dir);
-      given.push_back({name, {Verb::Run, Verb::Validate, Verb::Nodes, Verb::Dot, Verb::Batch}});
-    } else if (name == "--json") {
-      if (has_value) throw UsageError("--json takes no value");
-      o.json = true;
-      given.push_back({name, {Verb::Nodes}});
+    const std::string arg = argv[i];
+    options_end = options_end || arg == "--";
+    const auto eq = arg.find('=');
+    const auto spec = std::find_if(option_specs().begin(), option_specs().end(), [&](const OptionSpec& s) {
+      return !options_end && eq != std::string::npos && arg.compare(0, eq, s.name) == 0 &&
+             std::strlen(s.name) == eq;
+    });
+    if (spec != option_specs().end() && !*spec->value)
+      throw UsageError(std::string(spec->name) + " takes no value");
+    if (spec != option_specs().end() && eq + 1 == arg.size()) {
+      args.push_back(spec->name);
+      args.emplace_back();
     } else {
-      throw UsageError("unknown option '" + arg + "'");
+      args.push_back(arg);
     }
   }
+  std::reverse(args.begin(), args.end());
+  return args;
+}
 
-  if (help) {
+// CLI11 stops at an option whose value is missing ("--jobs: 1 required N missing").
+std::string parse_error_message(const CLI::ParseError& e) {
+  const std::string what = e.what();
+  if (dynamic_cast<const CLI::ArgumentMismatch*>(&e)) {
+    for (const OptionSpec& spec : option_specs()) {
+      if (what.rfind(std::string(spec.name) + ":", 0) != 0) continue;
+      return spec.list ? std::string(spec.name) + " needs at least one file or pattern"
+                       : std::string(spec.name) + " needs a value";
+    }
+  }
+  return what;
+}
+
+// What CLI11 left over: options nobody knows, and arguments before the verb.
+std::vector<std::string> refuse_unknown_options(const CommandLine& cli) {
+  std::vector<std::string> arguments;
+  for (const std::string& arg : cli.app.remaining()) {
+    if (arg.size() > 1 && arg[0] == '-') throw UsageError("unknown option '" + arg + "'");
+    arguments.push_back(arg);
+  }
+  return arguments;
+}
+
+// Every value of every option, top level first (given before the verb), then the verb's own.
+void apply_values(const CommandLine& cli, Options& o) {
+  const CommandLine::Verbs* verb = cli.given_verb();
+  const std::vector<OptionSpec>& specs = option_specs();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    std::vector<std::string> values = cli.top[i]->results();
+    if (verb && verb->options[i]) {
+      for (const std::string& v : verb->options[i]->results()) values.push_back(v);
+    }
+    for (const std::string& value : values) specs[i].apply(o, value);
+  }
+}
+
+// The verb: the first argument, which CLI11 took as a subcommand unless it is none.
+Verb verb_of(const CommandLine& cli, const std::vector<std::string>& before_verb) {
+  if (before_verb.empty()) {
+    if (const CommandLine::Verbs* v = cli.given_verb()) return v->verb;
+    throw UsageError("no verb given: run, validate, nodes, dot, batch or merge");
+  }
+  std::vector<std::string> names;
+  for (const VerbName& v : kVerbs) names.emplace_back(v.name);
+  const std::string& text = before_verb.front();
+  const std::string near = kg::nearest_name(text, names);
+  throw UsageError("unknown verb '" + text + "'" + (near.empty() ? "" : "; did you mean '" + near + "'?"));
+}
+
+// An option given before the verb, or after it to a verb it does not apply to.
+void check_options_apply(const CommandLine& cli, Verb verb) {
+  const std::vector<OptionSpec>& specs = option_specs();
+  for (std::size_t i = 0; i < specs.size(); ++i) {
+    if (cli.top[i]->count() > 0 && !applies(specs[i], verb))
+      throw UsageError(std::string(specs[i].name) + " does not apply to " + verb_name(verb));
+  }
+}
+
+// GRAPH or merge's DIR, and nothing after it.
+void take_operand(const CommandLine::Verbs& v, Options& o) {
+  if (const char* operand = operand_of(v.verb)) {
+    if (v.operand_option->count() == 0) {
+      throw UsageError(v.verb == Verb::Merge
+                           ? std::string("merge needs the batch's DIR")
+                           : std::string(verb_name(v.verb)) + " needs a " + operand + " file");
+    }
+    (v.verb == Verb::Merge ? o.out : o.graph) = v.operand;
+  }
+  if (!v.extra.empty()) throw UsageError("unexpected argument '" + v.extra.front() + "'");
+}
+
+void check_batch(const Options& o) {
+  if (o.inputs.empty() && o.input_list.empty())
+    throw UsageError("batch needs --inputs PATTERN... or --input-list FILE");
+  if (o.out.empty()) throw UsageError("batch needs --out DIR");
+  if (o.slurm.empty() && (o.shards || !o.sbatch_options.empty() || o.submit))
+    throw UsageError("--shards, --sbatch and --submit go with --slurm SCRIPT");
+  if (!o.slurm.empty() && o.shard)
+    throw UsageError("--shard and --slurm do not go together (each array task is a shard)");
+  for (const char* own : {"input", "stem", "out"}) {
+    if (o.sets.count(own)) {
+      throw UsageError(std::string("--set ") + own + "=...: batch sets the variable " + own +
+                       " for each item itself");
+    }
+  }
+}
+
+}  // namespace
+
+Options parse_options(int argc, const char* const* argv) {
+  CommandLine cli;
+  try {
+    cli.app.parse(arguments_of(argc, argv));
+  } catch (const CLI::ParseError& e) {
+    throw UsageError(parse_error_message(e));
+  }
+  const std::vector<std::string> before_verb = refuse_unknown_options(cli);
+  Options o;
+  apply_values(cli, o);
+  const CommandLine::Verbs* given = cli.given_verb();
+  if (cli.help->count() > 0 || (given && given->app->get_option("--help")->count() > 0)) {
     o.verb = Verb::Help;
+    if (given && before_verb.empty()) o.help_topic = given->verb;
     return o;
   }
-  if (version) {
+  if (cli.version->count() > 0) {
     o.verb = Verb::Version;
     return o;
   }
-  if (positionals.empty()) throw UsageError("no verb given: run, validate, nodes, dot, batch or merge");
-  const std::string& verb_text = positionals.front();
-  for (const VerbName& v : kVerbs) {
-    if (verb_text == v.name) verb = v.verb;
-  }
-  if (verb_text == "help") {
-    o.verb = Verb::Help;
-    return o;
-  }
-  if (!verb) {
-    std::vector<std::string> names;
-    for (const VerbName& v : kVerbs) names.emplace_back(v.name);
-    const std::string near = kg::nearest_name(verb_text, names);
-    throw UsageError("unknown verb '" + verb_text + "'" +
-                     (near.empty() ? "" : "; did you mean '" + near + "'?"));
-  }
-  o.verb = *verb;
-  for (const auto& [option, verbs] : given) {
-    bool ok = false;
-    for (Verb v : verbs) ok = ok || v == o.verb;
-    if (!ok) throw UsageError(option + " does not apply to " + verb_name(o.verb));
-  }
-  if (takes_graph(o.verb)) {
-    if (positionals.size() < 2) throw UsageError(std::string(verb_name(o.verb)) + " needs a GRAPH file");
-    if (positionals.size() > 2) throw UsageError("unexpected argument '" + positionals[2] + "'");
-    o.graph = positionals[1];
-  } else if (o.verb == Verb::Merge) {
-    if (positionals.size() < 2) throw UsageError("merge needs the batch's DIR");
-    if (positionals.size() > 2) throw UsageError("unexpected argument '" + positionals[2] + "'");
-    o.out = positionals[1];
-  } else if (positionals.size() > 1) {
-    throw UsageError("unexpected argument '" + positionals[1] + "'");
-  }
-  if (o.verb == Verb::Batch) {
-    if (o.inputs.empty() && o.input_list.empty())
-      throw UsageError("batch needs --inputs PATTERN... or --input-list FILE");
-    if (o.out.empty()) throw UsageError("batch needs --out DIR");
-    if (o.slurm.empty() && (o.shards || !o.sbatch_options.empty() || o.submit)) {
-      throw UsageError("--shards, --sbatch and --submit go with --slurm SCRIPT");
-    }
-    if (!o.slurm.empty() && o.shard)
-      throw UsageError("--shard and --slurm do not go together (each array task is a shard)");
-    for (const char* own : {"input", "stem", "out"}) {
-      if (o.sets.count(own)) {
-        throw UsageError(std::string("--set ") + own + "=...: batch sets the variable " + own +
-                         " for each item itself");
-      }
-    }
-  }
+  o.verb = verb_of(cli, before_verb);
+  if (o.verb == Verb::Help) return o;
+  check_options_apply(cli, o.verb);
+  take_operand(*given, o);
+  if (o.verb == Verb::Batch) check_batch(o);
   return o;
+}
+
+std::string verb_usage_text(Verb verb) {
+  CommandLine cli;
+  for (const CommandLine::Verbs& v : cli.verbs) {
+    if (v.verb == verb && verb != Verb::Help) return v.app->help("kinegraph");
+  }
+  return usage_text();
 }
 
 }  // namespace kg::app

@@ -127,6 +127,44 @@ TEST_CASE("usage errors exit 2 with a message on stderr", "[cli]") {
   }
 }
 
+TEST_CASE("a verb's --help lists its operand and the options that apply to it", "[cli]") {
+  const Result run = kinegraph({"run", "--help"});
+  INFO(show(run));
+  CHECK(run.code == 0);
+  CHECK_THAT(run.out, Contains("Usage: kinegraph run GRAPH") && Contains("--report FILE") &&
+                          Contains("-j,--jobs N") && Contains("kinegraph --help"));
+  CHECK_THAT(run.out, !Contains("--inputs"));
+  const Result validate = kinegraph({"validate", "-h"});
+  CHECK(validate.code == 0);
+  CHECK_THAT(validate.out, Contains("--set NAME=VALUE") && !Contains("--report"));
+  const Result merge = kinegraph({"merge", "--help"});
+  CHECK_THAT(merge.out, Contains("Usage: kinegraph merge DIR") && !Contains("--plugin-dir"));
+  CHECK(kinegraph({"help"}).out == kinegraph({"--help"}).out);  // the whole usage text
+}
+
+TEST_CASE("the forms of an option's value: attached, empty, and a flag given one", "[cli]") {
+  struct Case {
+    std::vector<std::string> args;
+    const char* message;
+  };
+  const Case cases[] = {
+      {{"run", "g.yaml", "--report="}, "--report needs a file name"},
+      {{"run", "g.yaml", "--report=", "r.json"}, "--report needs a file name"},  // "" is the value
+      {{"run", "g.yaml", "--set="}, "--set expects NAME=VALUE, got ''"},
+      {{"run", "g.yaml", "--reproducible=yes"}, "--reproducible takes no value"},
+      {{"run", "g.yaml", "--reproducible=true"}, "--reproducible takes no value"},
+      {{"nodes", "--json="}, "--json takes no value"},
+      {{"run", "g.yaml", "--", "--json"}, "unexpected argument '--json'"},
+      {{"g.yaml", "run"}, "unknown verb 'g.yaml'"},
+  };
+  for (const Case& c : cases) {
+    const Result r = kinegraph(c.args);
+    INFO(show(r));
+    CHECK(r.code == 2);
+    CHECK_THAT(r.err, StartsWith("kinegraph: ") && Contains(c.message));
+  }
+}
+
 TEST_CASE("run: --set, outputs, a summary; --report JSON", "[cli]") {
   TempDir dir;
   const fs::path graph = dir.write("sum.yaml", kSumGraph);
