@@ -477,29 +477,175 @@ void sweep_temporaries(const fs::path& folder, pid_t pid) {
 // each other (a --set output=... common to all, or two batches' items sharing a folder).
 using Claims = std::map<std::string, std::string>;  // output path -> input
 
-Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd,
-                  Claims& claims) {
-  Outcome outcome;
-  g_interrupted = 0;
-  if (::pipe2(g_signal_pipe, O_CLOEXEC | O_NONBLOCK) != 0)
-    throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
-  struct sigaction action {};
-  struct sigaction previous[std::size(kStopSignals)];
-  action.sa_handler = batch_interrupted;
-  ::sigemptyset(&action.sa_mask);
-  for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
-    ::sigaction(kStopSignals[i], &action, &previous[i]);
+// The batch's handlers of kStopSignals, and the pipe through which they wake poll(), for as long
+// as it lives; the handlers found before are put back when it ends.
+class StopSignals {
+ public:
+  StopSignals() {
+    g_interrupted = 0;
+    if (::pipe2(g_signal_pipe, O_CLOEXEC | O_NONBLOCK) != 0)
+      throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
+    struct sigaction action {};
+    action.sa_handler = batch_interrupted;
+    ::sigemptyset(&action.sa_mask);
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
+      ::sigaction(kStopSignals[i], &action, &previous_[i]);
+    ::sigemptyset(&set_);
+    for (int sig : kStopSignals) ::sigaddset(&set_, sig);
+  }
+  ~StopSignals() {
+    for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
+      ::sigaction(kStopSignals[i], &previous_[i], nullptr);
+    ::close(g_signal_pipe[0]);
+    ::close(g_signal_pipe[1]);
+  }
+  StopSignals(const StopSignals&) = delete;
+  StopSignals& operator=(const StopSignals&) = delete;
+
   // Blocked around fork, so that a new item never runs with the batch's handlers.
-  sigset_t stop_signals, unblocked;
-  ::sigemptyset(&stop_signals);
-  for (int sig : kStopSignals) ::sigaddset(&stop_signals, sig);
+  const sigset_t& set() const { return set_; }
 
-  Progress progress(todo.size(), ::isatty(STDERR_FILENO) && std::getenv("TERM") &&
-                                     std::string(std::getenv("TERM")) != "dumb");
-  std::vector<Running> running;
-  std::size_t next = 0;
+ private:
+  struct sigaction previous_[std::size(kStopSignals)];
+  sigset_t set_;
+};
 
-  auto finish = [&](Running& r, int status) {
+bool stderr_is_terminal() {
+  const char* term = std::getenv("TERM");
+  return ::isatty(STDERR_FILENO) && term && std::string(term) != "dumb";
+}
+
+// The items to do, up to `jobs` processes at once: each forked to run_item, its manifest line read
+// back through a pipe, and recorded as it ends (the manifest, the progress, the outputs claimed).
+class Workers {
+ public:
+  Workers(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd,
+          Claims& claims, const StopSignals& signals)
+      : host_(host),
+        b_(b),
+        todo_(todo),
+        jobs_(jobs),
+        manifest_fd_(manifest_fd),
+        claims_(claims),
+        signals_(signals),
+        progress_(todo.size(), stderr_is_terminal()) {}
+
+  Outcome run() {
+    try {
+      std::vector<pollfd> polled;
+      while (true) {
+        if (g_interrupted) stop();
+        start_items();
+        if (running_.empty()) break;
+        const int ready = wait(polled);
+        if (g_interrupted) stop();
+        collect(polled, ready);
+        progress_.tick();
+      }
+    } catch (...) {
+      // Leave no worker behind: stop them, and keep the records of those that had finished.
+      progress_.finish();
+      abandon();
+      throw;
+    }
+    progress_.finish();
+    return std::move(outcome_);
+  }
+
+ private:
+  void start_items() {
+    while (!outcome_.stopped && running_.size() < static_cast<std::size_t>(jobs_) && next_ < todo_.size()) {
+      start(*todo_[next_]);
+      ++next_;
+    }
+  }
+
+  // Forks the process of one item; it writes its manifest line into a pipe of its own.
+  void start(const Item& item) {
+    int fds[2];
+    if (::pipe2(fds, O_CLOEXEC) != 0)
+      throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
+    std::cout.flush();
+    std::cerr.flush();
+    sigset_t unblocked;
+    ::sigprocmask(SIG_BLOCK, &signals_.set(), &unblocked);
+    const pid_t pid = ::fork();
+    if (pid < 0) {
+      const int error = errno;
+      ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+      ::close(fds[0]);
+      ::close(fds[1]);
+      throw Failure{kExitNodeFailed, std::string("cannot start a process: ") + std::strerror(error)};
+    }
+    if (pid == 0) {
+      for (int sig : kStopSignals) ::signal(sig, SIG_DFL);
+      ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+      ::close(fds[0]);
+      ::close(g_signal_pipe[0]);
+      ::close(g_signal_pipe[1]);
+      if (manifest_fd_ >= 0) ::close(manifest_fd_);
+      for (const Running& other : running_) ::close(other.fd);
+      run_item(host_, b_, item, fds[1]);
+    }
+    ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
+    ::close(fds[1]);
+    running_.push_back({pid, fds[0], &item, {}});
+  }
+
+  // Up to 200 ms for a worker's output or a stop signal. `polled`: the signal pipe, then one per
+  // running worker. Returns how many are ready.
+  int wait(std::vector<pollfd>& polled) {
+    polled.clear();
+    polled.push_back({g_signal_pipe[0], POLLIN, 0});
+    for (const Running& r : running_) polled.push_back({r.fd, POLLIN, 0});
+    const int ready = ::poll(polled.data(), polled.size(), 200);
+    if (ready < 0 && errno != EINTR)
+      throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
+    if (ready > 0 && (polled[0].revents & POLLIN)) {
+      unsigned char sig[16];
+      while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
+      }
+    }
+    return ready;
+  }
+
+  // Reads what the ready workers wrote; one whose pipe closed has ended: reaped and recorded.
+  void collect(const std::vector<pollfd>& polled, int ready) {
+    for (std::size_t i = running_.size(); ready > 0 && i-- > 0;) {
+      if (!(polled[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) continue;
+      char buffer[4096];
+      const ssize_t n = ::read(running_[i].fd, buffer, sizeof buffer);
+      if (n > 0) {
+        running_[i].output.append(buffer, static_cast<std::size_t>(n));
+        continue;
+      }
+      if (n < 0 && errno == EINTR) continue;
+      ::close(running_[i].fd);
+      int status = 0;
+      while (::waitpid(running_[i].pid, &status, 0) < 0 && errno == EINTR) {
+      }
+      finish(running_[i], status);
+      running_.erase(running_.begin() + static_cast<std::ptrdiff_t>(i));
+    }
+  }
+
+  void finish(const Running& r, int status) {
+    std::optional<graph::ManifestRecord> record = record_of(r, status);
+    if (!record) {
+      ++outcome_.interrupted;
+      return;
+    }
+    refuse_claimed_outputs(*record);
+    if (manifest_fd_ >= 0 && !write_all(manifest_fd_, graph::manifest_line(*record) + "\n"))
+      warn("cannot append to the manifest: " + std::string(std::strerror(errno)));
+    progress_.item_done(*record, b_.dir);
+    outcome_.records.push_back(std::move(*record));
+  }
+
+  // The line the worker wrote, or a failed record saying how it ended; none when it was stopped
+  // from outside (Ctrl-C reaches the whole process group, Slurm's scancel every process of the
+  // job): not the item's fault, so the next run does it again.
+  std::optional<graph::ManifestRecord> record_of(const Running& r, int status) const {
     graph::ManifestRecord record;
     bool have = false;
     if (!r.output.empty() && r.output.back() == '\n') {
@@ -510,38 +656,38 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
         record.message = std::string("its report could not be read: ") + e.what();
       }
     }
-    const fs::path partial = b.partial_log(*r.item, r.pid);
+    if (have) return record;
+    const fs::path partial = b_.partial_log(*r.item, r.pid);
     std::error_code ec;
-    if (!have && WIFSIGNALED(status)) sweep_temporaries(b.dir / r.item->name, r.pid);
-    // Stopped from outside (Ctrl-C reaches the whole process group, Slurm's scancel every
-    // process of the job): not the item's fault, so no record, and the next run does it again.
-    if (!have && WIFSIGNALED(status) &&
-        std::find(std::begin(kStopSignals), std::end(kStopSignals), WTERMSIG(status)) !=
-            std::end(kStopSignals)) {
+    if (WIFSIGNALED(status)) sweep_temporaries(b_.dir / r.item->name, r.pid);
+    if (WIFSIGNALED(status) && std::find(std::begin(kStopSignals), std::end(kStopSignals),
+                                         WTERMSIG(status)) != std::end(kStopSignals)) {
       fs::remove(partial, ec);
-      ++outcome.interrupted;
-      return;
+      return std::nullopt;
     }
-    if (!have) {
-      record.input = r.item->input.string();
-      record.stem = r.item->stem;
-      record.item = r.item->name.generic_string();
-      record.status = "failed";
-      if (record.message.empty()) {
-        record.message = WIFSIGNALED(status) ? "its process died of " + signal_name(WTERMSIG(status))
-                                             : "its process exited with code " +
-                                                   std::to_string(WEXITSTATUS(status)) + " before reporting";
-      }
-      record.log = relative_to(b.log(*r.item), b.dir);
-      record.graph_sha256 = b.graph_sha256;
-      record.settings_sha256 = b.settings_sha256;
-      record.host = b.host_name;
-      record.shard = b.shard;
-      record.finished_at = graph::utc_timestamp();
-      if (fs::exists(partial, ec)) fs::rename(partial, b.log(*r.item), ec);
+    record.input = r.item->input.string();
+    record.stem = r.item->stem;
+    record.item = r.item->name.generic_string();
+    record.status = "failed";
+    if (record.message.empty()) {
+      record.message = WIFSIGNALED(status) ? "its process died of " + signal_name(WTERMSIG(status))
+                                           : "its process exited with code " +
+                                                 std::to_string(WEXITSTATUS(status)) + " before reporting";
     }
+    record.log = relative_to(b_.log(*r.item), b_.dir);
+    record.graph_sha256 = b_.graph_sha256;
+    record.settings_sha256 = b_.settings_sha256;
+    record.host = b_.host_name;
+    record.shard = b_.shard;
+    record.finished_at = graph::utc_timestamp();
+    if (fs::exists(partial, ec)) fs::rename(partial, b_.log(*r.item), ec);
+    return record;
+  }
+
+  // An output another item of the batch also wrote fails this one.
+  void refuse_claimed_outputs(graph::ManifestRecord& record) {
     for (const graph::ManifestFile& output : record.outputs) {
-      const auto [claim, fresh] = claims.emplace(output.path, record.input);
+      const auto [claim, fresh] = claims_.emplace(output.path, record.input);
       if (fresh || claim->second == record.input) continue;
       record.status = "failed";
       record.message += std::string(record.message.empty() ? "" : "; ") + "it wrote " + output.path +
@@ -549,108 +695,46 @@ Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, in
                         " also writes: the items overwrite each other's outputs (give each its " +
                         "own ${out}, or this batch another --out)";
     }
-    if (manifest_fd >= 0 && !write_all(manifest_fd, graph::manifest_line(record) + "\n"))
-      warn("cannot append to the manifest: " + std::string(std::strerror(errno)));
-    progress.item_done(record, b.dir);
-    outcome.records.push_back(std::move(record));
-  };
-  auto stop = [&] {
-    if (outcome.stopped) return;
-    outcome.stopped = true;
-    progress.finish();
-    std::cerr << "kinegraph: batch: interrupted; stopping " << running.size()
+  }
+
+  // Ctrl-C or SIGTERM: no more items start, and the running ones are stopped.
+  void stop() {
+    if (outcome_.stopped) return;
+    outcome_.stopped = true;
+    progress_.finish();
+    std::cerr << "kinegraph: batch: interrupted; stopping " << running_.size()
               << " running item(s) and removing their partial outputs\n";
-    for (const Running& r : running) ::kill(r.pid, SIGTERM);
-  };
-  auto restore = [&] {
-    for (std::size_t i = 0; i < std::size(kStopSignals); ++i)
-      ::sigaction(kStopSignals[i], &previous[i], nullptr);
-    ::close(g_signal_pipe[0]);
-    ::close(g_signal_pipe[1]);
-  };
+    for (const Running& r : running_) ::kill(r.pid, SIGTERM);
+  }
 
-  try {
-    while (true) {
-      if (g_interrupted) stop();
-      while (!outcome.stopped && running.size() < static_cast<std::size_t>(jobs) && next < todo.size()) {
-        int fds[2];
-        if (::pipe2(fds, O_CLOEXEC) != 0)
-          throw Failure{kExitNodeFailed, std::string("cannot create a pipe: ") + std::strerror(errno)};
-        std::cout.flush();
-        std::cerr.flush();
-        ::sigprocmask(SIG_BLOCK, &stop_signals, &unblocked);
-        const pid_t pid = ::fork();
-        if (pid < 0) {
-          const int error = errno;
-          ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-          ::close(fds[0]);
-          ::close(fds[1]);
-          throw Failure{kExitNodeFailed, std::string("cannot start a process: ") + std::strerror(error)};
-        }
-        if (pid == 0) {
-          for (int sig : kStopSignals) ::signal(sig, SIG_DFL);
-          ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-          ::close(fds[0]);
-          ::close(g_signal_pipe[0]);
-          ::close(g_signal_pipe[1]);
-          if (manifest_fd >= 0) ::close(manifest_fd);
-          for (const Running& other : running) ::close(other.fd);
-          run_item(host, b, *todo[next], fds[1]);
-        }
-        ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
-        ::close(fds[1]);
-        running.push_back({pid, fds[0], todo[next], {}});
-        ++next;
-      }
-      if (running.empty()) break;
-
-      std::vector<pollfd> polled;
-      polled.push_back({g_signal_pipe[0], POLLIN, 0});
-      for (const Running& r : running) polled.push_back({r.fd, POLLIN, 0});
-      const int ready = ::poll(polled.data(), polled.size(), 200);
-      if (ready < 0 && errno != EINTR)
-        throw Failure{kExitNodeFailed, std::string("poll: ") + std::strerror(errno)};
-      if (ready > 0 && (polled[0].revents & POLLIN)) {
-        unsigned char sig[16];
-        while (::read(g_signal_pipe[0], sig, sizeof sig) > 0) {
-        }
-      }
-      if (g_interrupted) stop();
-      for (std::size_t i = running.size(); ready > 0 && i-- > 0;) {
-        if (!(polled[i + 1].revents & (POLLIN | POLLHUP | POLLERR))) continue;
-        char buffer[4096];
-        const ssize_t n = ::read(running[i].fd, buffer, sizeof buffer);
-        if (n > 0) {
-          running[i].output.append(buffer, static_cast<std::size_t>(n));
-          continue;
-        }
-        if (n < 0 && errno == EINTR) continue;
-        ::close(running[i].fd);
-        int status = 0;
-        while (::waitpid(running[i].pid, &status, 0) < 0 && errno == EINTR) {
-        }
-        finish(running[i], status);
-        running.erase(running.begin() + static_cast<std::ptrdiff_t>(i));
-      }
-      progress.tick();
-    }
-  } catch (...) {
-    // Leave no worker behind: stop them, and keep the records of those that had finished.
-    progress.finish();
-    for (Running& r : running) {
+  void abandon() {
+    for (Running& r : running_) {
       ::kill(r.pid, SIGTERM);
       ::close(r.fd);
       int status = 0;
       while (::waitpid(r.pid, &status, 0) < 0 && errno == EINTR) {
       }
-      sweep_temporaries(b.dir / r.item->name, r.pid);
+      sweep_temporaries(b_.dir / r.item->name, r.pid);
     }
-    restore();
-    throw;
   }
-  progress.finish();
-  restore();
-  return outcome;
+
+  Host& host_;
+  const Batch& b_;
+  const std::vector<Item*>& todo_;
+  int jobs_;
+  int manifest_fd_;  // -1: none
+  Claims& claims_;
+  const StopSignals& signals_;
+  Progress progress_;
+  std::vector<Running> running_;
+  std::size_t next_ = 0;  // the next of todo_ to start
+  Outcome outcome_;
+};
+
+Outcome run_items(Host& host, const Batch& b, const std::vector<Item*>& todo, int jobs, int manifest_fd,
+                  Claims& claims) {
+  const StopSignals signals;
+  return Workers(host, b, todo, jobs, manifest_fd, claims, signals).run();
 }
 
 // One line per item: this batch's items in order, then any other record the folder holds.
