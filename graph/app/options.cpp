@@ -111,7 +111,12 @@ void apply_plugin_dir(Options& o, const std::string& dir) {
   o.plugin_dirs.emplace_back(dir);
 }
 
-constexpr Verb kGraphVerbs[] = {Verb::Run, Verb::Validate, Verb::Dot, Verb::Batch};
+// Verbs as a set of bits.
+using VerbSet = unsigned;
+constexpr VerbSet in(Verb verb) {
+  return 1u << static_cast<unsigned>(verb);
+}
+constexpr VerbSet kGraphVerbs = in(Verb::Run) | in(Verb::Validate) | in(Verb::Dot) | in(Verb::Batch);
 
 // An option of the command line: what it takes, the verbs it applies to, and what a value does.
 struct OptionSpec {
@@ -119,104 +124,52 @@ struct OptionSpec {
   const char* short_name;  // "-j", or ""
   const char* value;       // its value in the help ("N"); "" for a flag
   const char* doc;
-  std::vector<Verb> verbs;
+  VerbSet verbs;
   void (*apply)(Options&, const std::string& value);  // called per value, in the order given
   bool list = false;                                  // takes every argument up to the next option (--inputs)
 };
 
-const std::vector<OptionSpec>& option_specs() {
-  using O = Options;
-  using S = const std::string&;
-  static const std::vector<OptionSpec> specs = {
-      {"--set",
-       "",
-       "NAME=VALUE",
-       "give the graph variable NAME a value (GRAPH documents its variables)",
-       {std::begin(kGraphVerbs), std::end(kGraphVerbs)},
-       apply_set},
-      {"--jobs",
-       "-j",
-       "N",
-       "run: independent branches on up to N threads (default 1); batch: items at once (default: the "
-       "cores this process may use; with --slurm, the CPUs of each array task, default 1)",
-       {Verb::Run, Verb::Batch},
-       apply_jobs},
-      {"--report",
-       "",
-       "FILE",
-       "write per-node status, wall times and reported figures as JSON to FILE",
-       {Verb::Run},
-       [](O& o, S v) { set_path_once(o.report, "--report", v, "a file name"); }},
-      {"--reproducible",
-       "",
-       "",
-       "files written come out byte for byte the same on every run and machine (no wall-clock times)",
-       {Verb::Run},
-       [](O& o, S) { o.reproducible = true; }},
-      {"--plugin-dir",
-       "",
-       "DIR",
-       "load every plugin (*.so) directly in DIR; may be repeated",
-       {Verb::Run, Verb::Validate, Verb::Nodes, Verb::Dot, Verb::Batch},
-       apply_plugin_dir},
-      {"--json", "", "", "print JSON instead of text", {Verb::Nodes}, [](O& o, S) { o.json = true; }},
-      {"--inputs",
-       "",
-       "PATTERN...",
-       "input files, as paths or patterns: * ? [..] within a folder name, ** for any depth of folders "
-       "(quoted); every argument up to the next option is a pattern",
-       {Verb::Batch},
-       [](O& o, S v) { o.inputs.push_back(v); },
-       true},
-      {"--input-list",
-       "",
-       "FILE",
-       "input files listed in FILE, one per line (with or without --inputs)",
-       {Verb::Batch},
-       [](O& o, S v) { set_path_once(o.input_list, "--input-list", v, "a file name"); }},
-      {"--out",
-       "",
-       "DIR",
-       "the folder of item outputs, logs and the manifest",
-       {Verb::Batch},
-       [](O& o, S v) { set_path_once(o.out, "--out", v, "a folder"); }},
-      {"--force", "", "", "redo items already done", {Verb::Batch}, [](O& o, S) { o.force = true; }},
-      {"--shard",
-       "",
-       "I/N",
-       "run only items I, I+N, I+2N, ... of the sorted inputs (0 <= I < N)",
-       {Verb::Batch},
-       apply_shard},
-      {"--slurm",
-       "",
-       "SCRIPT",
-       "write SCRIPT, an sbatch array job, and SCRIPT's merge job beside it",
-       {Verb::Batch},
-       [](O& o, S v) { set_path_once(o.slurm, "--slurm", v, "a script file name"); }},
-      {"--shards",
-       "",
-       "N",
-       "with --slurm: array tasks (default: one per 8 items, at most 100)",
-       {Verb::Batch},
-       apply_shards},
-      {"--sbatch",
-       "",
-       "OPTION",
-       "with --slurm: an #SBATCH line for both jobs (--sbatch=--partition=short)",
-       {Verb::Batch},
-       apply_sbatch},
-      {"--submit",
-       "",
-       "",
-       "with --slurm: submit the array, then the merge depending on it",
-       {Verb::Batch},
-       [](O& o, S) { o.submit = true; }},
-  };
-  return specs;
-}
+// Shorthands for the lambdas of the table.
+using O = Options;
+using S = const std::string&;
+constexpr OptionSpec kOptions[] = {
+    {"--set", "", "NAME=VALUE", "give the graph variable NAME a value (GRAPH documents its variables)",
+     kGraphVerbs, apply_set},
+    {"--jobs", "-j", "N",
+     "run: independent branches on up to N threads (default 1); batch: items at once (default: the "
+     "cores this process may use; with --slurm, the CPUs of each array task, default 1)",
+     in(Verb::Run) | in(Verb::Batch), apply_jobs},
+    {"--report", "", "FILE", "write per-node status, wall times and reported figures as JSON to FILE",
+     in(Verb::Run), [](O& o, S v) { set_path_once(o.report, "--report", v, "a file name"); }},
+    {"--reproducible", "", "",
+     "files written come out byte for byte the same on every run and machine (no wall-clock times)",
+     in(Verb::Run), [](O& o, S) { o.reproducible = true; }},
+    {"--plugin-dir", "", "DIR", "load every plugin (*.so) directly in DIR; may be repeated",
+     kGraphVerbs | in(Verb::Nodes), apply_plugin_dir},
+    {"--json", "", "", "print JSON instead of text", in(Verb::Nodes), [](O& o, S) { o.json = true; }},
+    {"--inputs", "", "PATTERN...",
+     "input files, as paths or patterns: * ? [..] within a folder name, ** for any depth of folders "
+     "(quoted); every argument up to the next option is a pattern",
+     in(Verb::Batch), [](O& o, S v) { o.inputs.push_back(v); }, true},
+    {"--input-list", "", "FILE", "input files listed in FILE, one per line (with or without --inputs)",
+     in(Verb::Batch), [](O& o, S v) { set_path_once(o.input_list, "--input-list", v, "a file name"); }},
+    {"--out", "", "DIR", "the folder of item outputs, logs and the manifest", in(Verb::Batch),
+     [](O& o, S v) { set_path_once(o.out, "--out", v, "a folder"); }},
+    {"--force", "", "", "redo items already done", in(Verb::Batch), [](O& o, S) { o.force = true; }},
+    {"--shard", "", "I/N", "run only items I, I+N, I+2N, ... of the sorted inputs (0 <= I < N)",
+     in(Verb::Batch), apply_shard},
+    {"--slurm", "", "SCRIPT", "write SCRIPT, an sbatch array job, and SCRIPT's merge job beside it",
+     in(Verb::Batch), [](O& o, S v) { set_path_once(o.slurm, "--slurm", v, "a script file name"); }},
+    {"--shards", "", "N", "with --slurm: array tasks (default: one per 8 items, at most 100)",
+     in(Verb::Batch), apply_shards},
+    {"--sbatch", "", "OPTION", "with --slurm: an #SBATCH line for both jobs (--sbatch=--partition=short)",
+     in(Verb::Batch), apply_sbatch},
+    {"--submit", "", "", "with --slurm: submit the array, then the merge depending on it", in(Verb::Batch),
+     [](O& o, S) { o.submit = true; }},
+};
 
 bool applies(const OptionSpec& spec, Verb verb) {
-  return std::find(spec.verbs.begin(), spec.verbs.end(), verb) != spec.verbs.end();
+  return (spec.verbs & in(verb)) != 0;
 }
 
 CLI::Option* add_option(CLI::App& app, const OptionSpec& spec) {
@@ -258,10 +211,10 @@ struct CommandLine {
     std::string operand;  // its GRAPH or DIR
     CLI::Option* operand_option = nullptr;
     std::vector<std::string> extra;     // arguments beyond it
-    std::vector<CLI::Option*> options;  // per option_specs(): nullptr when it does not apply
+    std::vector<CLI::Option*> options;  // per kOptions: nullptr when it does not apply
   };
   std::vector<Verbs> verbs;       // kVerbs, then help; reserved: CLI11 holds references into them
-  std::vector<CLI::Option*> top;  // per option_specs(), on the top level
+  std::vector<CLI::Option*> top;  // per kOptions, on the top level
 
   CommandLine() {
     app.set_help_flag();
@@ -269,7 +222,7 @@ struct CommandLine {
     app.require_subcommand(0, 1);  // a verb's argument named like a verb is an argument
     help = app.add_flag("-h,--help")->group("");
     version = app.add_flag("--version")->group("");
-    for (const OptionSpec& spec : option_specs()) top.push_back(add_option(app, spec)->group(""));
+    for (const OptionSpec& spec : kOptions) top.push_back(add_option(app, spec)->group(""));
     verbs.reserve(std::size(kVerbs) + 1);
     for (const VerbName& v : kVerbs) add_verb(v.verb, v.name, v.doc);
     add_verb(Verb::Help, "help", "");
@@ -289,7 +242,7 @@ struct CommandLine {
     }
     sub->add_option("extra", v.extra)->group("");
     sub->add_flag("-h,--help")->group("");
-    for (const OptionSpec& spec : option_specs())
+    for (const OptionSpec& spec : kOptions)
       v.options.push_back(applies(spec, verb) ? add_option(*sub, spec) : nullptr);
   }
 
@@ -399,13 +352,13 @@ std::vector<std::string> arguments_of(int argc, const char* const* argv) {
     const std::string arg = argv[i];
     options_end = options_end || arg == "--";
     const auto eq = arg.find('=');
-    const auto spec = std::find_if(option_specs().begin(), option_specs().end(), [&](const OptionSpec& s) {
+    const auto spec = std::find_if(std::begin(kOptions), std::end(kOptions), [&](const OptionSpec& s) {
       return !options_end && eq != std::string::npos && arg.compare(0, eq, s.name) == 0 &&
              std::strlen(s.name) == eq;
     });
-    if (spec != option_specs().end() && !*spec->value)
+    if (spec != std::end(kOptions) && !*spec->value)
       throw UsageError(std::string(spec->name) + " takes no value");
-    if (spec != option_specs().end() && eq + 1 == arg.size()) {
+    if (spec != std::end(kOptions) && eq + 1 == arg.size()) {
       args.push_back(spec->name);
       args.emplace_back();
     } else {
@@ -420,7 +373,7 @@ std::vector<std::string> arguments_of(int argc, const char* const* argv) {
 std::string parse_error_message(const CLI::ParseError& e) {
   const std::string what = e.what();
   if (dynamic_cast<const CLI::ArgumentMismatch*>(&e)) {
-    for (const OptionSpec& spec : option_specs()) {
+    for (const OptionSpec& spec : kOptions) {
       if (what.rfind(std::string(spec.name) + ":", 0) != 0) continue;
       return spec.list ? std::string(spec.name) + " needs at least one file or pattern"
                        : std::string(spec.name) + " needs a value";
@@ -442,8 +395,8 @@ std::vector<std::string> refuse_unknown_options(const CommandLine& cli) {
 // Every value of every option, top level first (given before the verb), then the verb's own.
 void apply_values(const CommandLine& cli, Options& o) {
   const CommandLine::Verbs* verb = cli.given_verb();
-  const std::vector<OptionSpec>& specs = option_specs();
-  for (std::size_t i = 0; i < specs.size(); ++i) {
+  const auto& specs = kOptions;
+  for (std::size_t i = 0; i < std::size(specs); ++i) {
     std::vector<std::string> values = cli.top[i]->results();
     if (verb && verb->options[i]) {
       for (const std::string& v : verb->options[i]->results()) values.push_back(v);
@@ -467,8 +420,8 @@ Verb verb_of(const CommandLine& cli, const std::vector<std::string>& before_verb
 
 // An option given before the verb, or after it to a verb it does not apply to.
 void check_options_apply(const CommandLine& cli, Verb verb) {
-  const std::vector<OptionSpec>& specs = option_specs();
-  for (std::size_t i = 0; i < specs.size(); ++i) {
+  const auto& specs = kOptions;
+  for (std::size_t i = 0; i < std::size(specs); ++i) {
     if (cli.top[i]->count() > 0 && !applies(specs[i], verb))
       throw UsageError(std::string(specs[i].name) + " does not apply to " + verb_name(verb));
   }
