@@ -1,4 +1,5 @@
 #include "kg/builtin_nodes.hpp"
+#include "kg/io/nodes.hpp"
 #include "kg/retarget/nodes.hpp"
 
 namespace kg {
@@ -14,7 +15,9 @@ std::vector<graph::NodeType> builtin_node_types() {
 }
 
 std::vector<graph::Extension> builtin_extensions() {
-  return retarget::builtin_constraint_kind_extensions();
+  std::vector<graph::Extension> all = retarget::builtin_constraint_kind_extensions();
+  for (graph::Extension& format : io::builtin_motion_format_extensions()) all.push_back(std::move(format));
+  return all;
 }
 
 void register_builtin_nodes(graph::Registry& registry) {

@@ -4,9 +4,10 @@
 // it was.
 //
 // Lifetime: a plugin's code must outlive everything made from it. Rather than relying on the
-// order in which other containers destroy their members, every factory, node and extension is
-// wrapped here in a host-side object that holds the library and destroys the plugin's object
-// first; values a plugin node outputs are tied to the library through Value::kept_alive_by.
+// order in which other containers destroy their members, every factory and node is wrapped here
+// in a host-side object that holds the library and destroys the plugin's object first; each
+// extension's object and every value a plugin node outputs are tied to the library through
+// Extension::kept_alive_by and Value::kept_alive_by.
 #include "kg/graph/plugin_loader.hpp"
 
 #include <dlfcn.h>
@@ -114,31 +115,26 @@ class PluginNode final : public Node {
 };
 
 struct FactoryHolder {
-  std::shared_ptr<const void> library;  // declared first: destroyed after `create`
+  std::shared_ptr<const void> library;  // declared first: destroyed after the factories
   NodeFactory create;
+  RegistryNodeFactory create_with_registry;
 };
 
 NodeType wrap_node_type(NodeType type, const std::shared_ptr<const void>& library) {
-  auto holder = std::make_shared<const FactoryHolder>(FactoryHolder{library, std::move(type.create)});
-  type.create = [holder](const Params& params) -> std::unique_ptr<Node> {
-    std::unique_ptr<Node> inner = holder->create(params);
+  auto holder = std::make_shared<const FactoryHolder>(
+      FactoryHolder{library, std::move(type.create), std::move(type.create_with_registry)});
+  auto wrapped = [holder](std::unique_ptr<Node> inner) -> std::unique_ptr<Node> {
     if (!inner) throw std::runtime_error("the plugin's factory returned no node");
     return std::make_unique<PluginNode>(holder->library, std::move(inner));
   };
+  if (holder->create_with_registry) {
+    type.create_with_registry = [holder, wrapped](const Params& params, const Registry& registry) {
+      return wrapped(holder->create_with_registry(params, registry));
+    };
+  } else {
+    type.create = [holder, wrapped](const Params& params) { return wrapped(holder->create(params)); };
+  }
   return type;
-}
-
-struct ExtensionHolder {
-  std::shared_ptr<const void> library;  // declared first: destroyed after `factory`
-  std::shared_ptr<const void> factory;
-};
-
-Extension wrap_extension(Extension extension, const std::shared_ptr<const void>& library) {
-  auto holder =
-      std::make_shared<const ExtensionHolder>(ExtensionHolder{library, std::move(extension.factory)});
-  const void* raw = holder->factory.get();
-  extension.factory = std::shared_ptr<const void>(holder, raw);  // aliasing: owns the holder
-  return extension;
 }
 
 // Everything that can be checked without touching the registry; throws on the first problem.
@@ -148,7 +144,8 @@ void check_record(const PluginRecord& record, const Registry& registry, const fs
   for (const NodeType& type : record.nodes) {
     if (type.spec.type.empty())
       refuse(path, "plugin " + record.id + " declares a node type with an empty name");
-    if (!type.create) refuse(path, "node type " + type.spec.type + " has no factory");
+    if (!type.create && !type.create_with_registry)
+      refuse(path, "node type " + type.spec.type + " has no factory");
     if (!names.insert(type.spec.type).second) {
       refuse(path, "node type " + type.spec.type + " is listed twice by plugin " + record.id);
     }
@@ -159,12 +156,12 @@ void check_record(const PluginRecord& record, const Registry& registry, const fs
   }
   std::set<std::pair<std::string, std::string>> extensions;
   for (const Extension& e : record.extensions) {
-    const std::string what = "extension " + e.interface + " '" + e.name + "'";
-    if (e.interface.empty() || e.name.empty()) refuse(path, what + " needs an interface and a name");
-    if (!e.factory) refuse(path, what + " has no factory");
-    if (!extensions.insert({e.interface, e.name}).second)
+    const std::string what = "extension " + e.interface() + " '" + e.name() + "'";
+    if (e.interface().empty() || e.name().empty()) refuse(path, what + " needs an interface and a name");
+    if (e.empty()) refuse(path, what + " has no factory");
+    if (!extensions.insert({e.interface(), e.name()}).second)
       refuse(path, what + " is listed twice by plugin " + record.id);
-    if (registry.find_extension(e.interface, e.name)) refuse(path, what + " is already registered");
+    if (registry.find_extension(e.interface(), e.name())) refuse(path, what + " is already registered");
   }
   // Whatever else the registry checks about a spec, on a scratch registry first.
   Registry scratch;
@@ -235,8 +232,7 @@ LoadedPlugin PluginLoader::load_file(const fs::path& library_path) {
     const std::string origin = path.string();
     for (NodeType& type : record.nodes)
       registry_.add_node(wrap_node_type(std::move(type), owner), owner, origin);
-    for (Extension& e : record.extensions)
-      registry_.add_extension(wrap_extension(std::move(e), owner), owner, origin);
+    for (Extension& e : record.extensions) registry_.add_extension(e.kept_alive_by(owner), owner, origin);
     result = LoadedPlugin{record.id, record.version, path, record.nodes.size(), record.extensions.size()};
   }
   loaded_.push_back(result);

@@ -103,11 +103,18 @@ std::shared_ptr<const T> holding(std::shared_ptr<const T> target, std::shared_pt
 
 }  // namespace
 
+Extension Extension::kept_alive_by(std::shared_ptr<const void> owner) const {
+  Extension kept = *this;
+  kept.object_ = holding(object_, std::move(owner));
+  return kept;
+}
+
 void Registry::add_node(NodeType type, std::shared_ptr<const void> owner, std::string origin) {
   if (type.spec.type.empty() || has_blank(type.spec.type))
     throw Error("node type name '" + type.spec.type + "' from " + origin +
                 " must be non-empty and without blanks");
-  if (!type.create) throw Error("node type '" + type.spec.type + "' from " + origin + " has no factory");
+  if (!type.create && !type.create_with_registry)
+    throw Error("node type '" + type.spec.type + "' from " + origin + " has no factory");
   if (auto it = nodes_.find(type.spec.type); it != nodes_.end())
     throw Error("node type '" + type.spec.type + "' from " + origin + " is already registered by " +
                 it->second.origin);
@@ -117,16 +124,17 @@ void Registry::add_node(NodeType type, std::shared_ptr<const void> owner, std::s
 }
 
 void Registry::add_extension(Extension extension, std::shared_ptr<const void> owner, std::string origin) {
-  if (extension.interface.empty() || extension.name.empty())
-    throw Error("extension '" + extension.interface + "' / '" + extension.name + "' from " + origin +
+  const std::string& interface = extension.interface_;
+  const std::string& name = extension.name_;
+  if (interface.empty() || name.empty())
+    throw Error("extension '" + interface + "' / '" + name + "' from " + origin +
                 " needs an interface and a name");
-  if (!extension.factory)
-    throw Error("extension " + extension.interface + " '" + extension.name + "' from " + origin +
-                " has no factory");
-  std::string key = extension.interface + '\n' + extension.name;
+  if (!extension.object_)
+    throw Error("extension " + interface + " '" + name + "' from " + origin + " has no factory");
+  std::string key = interface + '\n' + name;
   if (auto it = extensions_.find(key); it != extensions_.end())
-    throw Error("extension " + extension.interface + " '" + extension.name + "' from " + origin +
-                " is already registered by " + it->second.origin);
+    throw Error("extension " + interface + " '" + name + "' from " + origin + " is already registered by " +
+                it->second.origin);
   extensions_.emplace(std::move(key),
                       ExtensionEntry{std::move(extension), std::move(owner), std::move(origin)});
 }
@@ -157,7 +165,9 @@ NodePtr Registry::create_node(const std::string& type, const Params& params) con
     if (!near.empty()) message += "; did you mean '" + near + "'?";
     throw Error(message);
   }
-  std::unique_ptr<Node> made = it->second.type.create(params);
+  const NodeType& made_as = it->second.type;
+  std::unique_ptr<Node> made =
+      made_as.create_with_registry ? made_as.create_with_registry(params, *this) : made_as.create(params);
   if (!made) throw Error("the factory of node type '" + type + "' (" + it->second.origin + ") made no node");
   if (!it->second.owner) return NodePtr(std::move(made));
   // The deleter runs the node's destructor (code in the plugin), then releases the library.
@@ -172,14 +182,14 @@ std::shared_ptr<const void> Registry::node_owner(const std::string& type) const 
 std::shared_ptr<const void> Registry::find_extension(const std::string& interface,
                                                      const std::string& name) const {
   auto it = extensions_.find(interface + '\n' + name);
-  if (it == extensions_.end() || it->second.extension.interface != interface) return nullptr;
-  return holding(it->second.extension.factory, it->second.owner);
+  if (it == extensions_.end() || it->second.extension.interface_ != interface) return nullptr;
+  return holding(it->second.extension.object_, it->second.owner);
 }
 
 std::vector<std::string> Registry::extension_names(const std::string& interface) const {
   std::vector<std::string> names;
   for (const auto& [key, entry] : extensions_)
-    if (entry.extension.interface == interface) names.push_back(entry.extension.name);
+    if (entry.extension.interface_ == interface) names.push_back(entry.extension.name_);
   std::sort(names.begin(), names.end());
   return names;
 }

@@ -1,23 +1,13 @@
-// ASF/AMC import to skeleton.hpp's conventions, and the extension dispatch of import_motion.
-#include <algorithm>
-#include <cctype>
+// ASF/AMC import to skeleton.hpp's conventions.
 #include <filesystem>
 #include <sstream>
 #include <stdexcept>
 
 #include "kg/io/asf_amc.hpp"
-#include "kg/io/bvh.hpp"
 
 namespace kg::io {
 
 namespace {
-
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
 
 std::string file_name_of(const std::string& path) {
   return std::filesystem::path(path).filename().string();
@@ -54,38 +44,6 @@ std::string guess_asf_for_amc(const std::string& amc_path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(candidate, ec)) return {};
   return candidate.string();
-}
-
-ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
-                             const ImportOptions& options) {
-  const std::string ext = lower_extension(path);
-  if (ext == ".bvh") {
-    if (!skeleton_path.empty()) {
-      throw std::invalid_argument(path +
-                                  ": a BVH file holds its own skeleton; expected skeleton \"\", got \"" +
-                                  skeleton_path + "\"");
-    }
-    return import_bvh(path, options);
-  }
-  if (ext == ".amc") {
-    std::string asf = skeleton_path;
-    std::vector<std::string> notes;
-    if (asf.empty()) {
-      asf = guess_asf_for_amc(path);
-      if (asf.empty()) {
-        throw std::invalid_argument(
-            path +
-            ": an AMC file needs its skeleton: set skeleton to the .asf file (none found "
-            "by the subject prefix of the name, e.g. 16_15.amc -> 16.asf)");
-      }
-      notes.push_back(file_name_of(path) + ": skeleton not given; using " + asf +
-                      " (the subject prefix of the name)");
-    }
-    ImportedMotion out = import_asf_amc(asf, path, options);
-    out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
-    return out;
-  }
-  throw std::invalid_argument(path + ": expected a .bvh or .amc file, got extension \"" + ext + "\"");
 }
 
 }  // namespace kg::io

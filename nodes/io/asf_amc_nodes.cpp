@@ -1,4 +1,5 @@
-// io.import_asf_amc and io.import_motion: thin adapters over kg/io/asf_amc.hpp (DESIGN.md 7).
+// io.import_asf_amc and io.import_motion: thin adapters over kg/io/asf_amc.hpp and, for
+// io.import_motion, the kg.MotionFormat claiming the path's extension (motion_format.hpp).
 #include <memory>
 #include <string>
 #include <vector>
@@ -11,13 +12,10 @@ namespace kg {
 
 namespace {
 
-using Importer = io::ImportedMotion (*)(const std::string& path, const std::string& skeleton,
-                                        const io::ImportOptions& options);
-
-// Both node types: an importer over params `path`, `skeleton` and the import options.
+// Both node types: a reader over params `path`, `skeleton` and the import options.
 class ImportNode final : public graph::Node {
  public:
-  ImportNode(const graph::Params& p, Importer import)
+  ImportNode(const graph::Params& p, io::MotionReader import)
       : import_(import),
         path_(p.get<std::string>("path")),
         skeleton_(p.get<std::string>("skeleton")),
@@ -40,14 +38,14 @@ class ImportNode final : public graph::Node {
   }
 
  private:
-  Importer import_;
+  io::MotionReader import_;
   std::string path_, skeleton_;
   io::ImportOptions options_;
 };
 
 // An ImportNode type: `files` (its path and skeleton params), then the import options.
 graph::NodeType import_type(std::string type, std::string doc, std::vector<graph::ParamSpec> files,
-                            Importer import) {
+                            io::MotionReader import) {
   for (graph::ParamSpec& p : io::import_option_params("auto")) {
     if (p.name == "fps") {
       p.doc =
@@ -66,6 +64,18 @@ graph::NodeType import_type(std::string type, std::string doc, std::vector<graph
   };
   return {std::move(spec),
           [import](const graph::Params& p) { return std::make_unique<ImportNode>(p, import); }};
+}
+
+// io.import_motion's reader: the one format of the registry claiming its path's extension, found
+// when the node is made, so that an unclaimed extension fails at load.
+graph::NodeType dispatching_by_extension(graph::NodeType type) {
+  type.create = {};
+  type.create_with_registry = [](const graph::Params& p, const graph::Registry& registry) {
+    std::shared_ptr<const io::MotionFormat> format =
+        io::motion_reader_for(p.get<std::string>("path"), io::motion_formats_in(registry));
+    return std::make_unique<ImportNode>(p, format->read);
+  };
+  return type;
 }
 
 io::ImportedMotion asf_amc_by_path(const std::string& path, const std::string& skeleton,
@@ -95,11 +105,12 @@ std::vector<graph::NodeType> asf_amc_node_types() {
             .doc = "the .amc motion file",
             .required = true}},
           &asf_amc_by_path),
-      import_type(
+      dispatching_by_extension(import_type(
           "io.import_motion",
-          "Reads a .bvh or an .amc file, chosen by the extension. An .amc needs its .asf skeleton: given "
-          "by `skeleton`, or else the file named by the AMC's subject prefix in the same folder "
-          "(16_15.amc -> 16.asf), said in the log.",
+          "Reads a motion file in the format its extension names, in any case: .bvh or .amc (kg.MotionFormat "
+          "extensions; plugins add more). An extension no reader claims fails the graph at load, naming the "
+          "readers. An .amc needs its .asf skeleton: given by `skeleton`, or else the file named by the "
+          "AMC's subject prefix in the same folder (16_15.amc -> 16.asf), said in the log.",
           {{.name = "path",
             .type = ParamType::InputPath,
             .default_value = std::string{},
@@ -109,7 +120,7 @@ std::vector<graph::NodeType> asf_amc_node_types() {
             .type = ParamType::InputPath,
             .default_value = std::string{},
             .doc = "the .asf skeleton of an .amc (\"\": guessed from the name); must be \"\" for a .bvh"}},
-          &io::import_motion),
+          io::MotionReader{})),
   };
 }
 

@@ -1,12 +1,15 @@
-// io.import_bvh and io.export_bvh: thin adapters over import_bvh and write_bvh (bvh.hpp).
+// io.import_bvh and io.export_bvh: thin adapters over import_bvh and write_bvh (bvh.hpp); and
+// io.export_motion, which writes through the kg.MotionFormat claiming its path's extension
+// (motion_format.hpp).
 #include <memory>
 #include <string>
 
-#include "kg/builtin_nodes.hpp"
-#include "kg/io/nodes.hpp"
 #include "kg/base/atomic_file.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
+#include "kg/io/motion_format.hpp"
+#include "kg/io/nodes.hpp"
 
 namespace kg {
 namespace {
@@ -43,16 +46,18 @@ class ImportBvhNode final : public graph::Node {
   io::ImportOptions options_;
 };
 
-class ExportBvhNode final : public graph::Node {
+// Both exporters: `format`'s writer over params `path`, `units` and `precision`.
+class ExportNode final : public graph::Node {
  public:
-  explicit ExportBvhNode(const graph::Params& p) : path_(p.get<std::string>("path")) {
+  ExportNode(const graph::Params& p, std::shared_ptr<const io::MotionFormat> format)
+      : format_(std::move(format)), path_(p.get<std::string>("path")) {
     options_.units = p.get<std::string>("units");
     options_.precision = static_cast<int>(p.get<std::int64_t>("precision"));
   }
 
   void run(graph::RunContext& ctx) const override {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
-    kg::write_file_atomically(path_, [&](std::ostream& os) { io::write_bvh(os, m, options_); });
+    kg::write_file_atomically(path_, [&](std::ostream& os) { format_->write(os, m, options_); });
     ctx.report("path", path_);
     ctx.report("frames", static_cast<std::int64_t>(m.frame_count()));
     ctx.report("units",
@@ -60,8 +65,9 @@ class ExportBvhNode final : public graph::Node {
   }
 
  private:
+  std::shared_ptr<const io::MotionFormat> format_;
   std::string path_;
-  io::BvhWriteOptions options_;
+  io::MotionWriteOptions options_;
 };
 
 graph::NodeSpec import_spec() {
@@ -84,19 +90,17 @@ graph::NodeSpec import_spec() {
   return spec;
 }
 
-graph::NodeSpec export_spec() {
+graph::NodeSpec export_spec(std::string type, std::string doc, std::string path_doc) {
   using graph::ParamType;
   return {
-      .type = "io.export_bvh",
+      .type = std::move(type),
       .version = 1,
-      .doc =
-          "Writes a clip as BVH (file axes, degrees, the skeleton's channel orders), atomically. Reading it "
-          "back gives the same values to the printed precision.",
+      .doc = std::move(doc),
       .inputs = {{"motion", "kg.Motion", true, "the clip to write"}},
       .params = {{.name = "path",
                   .type = ParamType::OutputPath,
                   .default_value = std::string{},
-                  .doc = "the .bvh file to write",
+                  .doc = std::move(path_doc),
                   .required = true},
                  {.name = "units",
                   .type = ParamType::Enum,
@@ -112,12 +116,39 @@ graph::NodeSpec export_spec() {
   };
 }
 
+graph::NodeType export_bvh_type() {
+  return {export_spec(
+              "io.export_bvh",
+              "Writes a clip as BVH (file axes, degrees, the skeleton's channel orders), atomically. Reading "
+              "it back gives the same values to the printed precision.",
+              "the .bvh file to write"),
+          [](const graph::Params& p) { return std::make_unique<ExportNode>(p, io::bvh_format()); }};
+}
+
+// The writer is the one format of the registry claiming the path's extension, found when the
+// node is made, so that an unclaimed extension (x.fbx) fails at load rather than getting BVH.
+graph::NodeType export_motion_type() {
+  graph::NodeType type{
+      export_spec("io.export_motion",
+                  "Writes a clip in the format its path's extension names, in any case, atomically: .bvh "
+                  "(kg.MotionFormat extensions; plugins add more). An extension no writer claims fails the "
+                  "graph at load, naming the writers. BVH as io.export_bvh writes it.",
+                  "the file to write; its extension picks the format (.bvh)"),
+      {}};
+  type.create_with_registry = [](const graph::Params& p, const graph::Registry& registry) {
+    return std::make_unique<ExportNode>(
+        p, io::motion_writer_for(p.get<std::string>("path"), io::motion_formats_in(registry)));
+  };
+  return type;
+}
+
 }  // namespace
 
 std::vector<graph::NodeType> bvh_node_types() {
   return {
       {import_spec(), [](const graph::Params& p) { return std::make_unique<ImportBvhNode>(p); }},
-      {export_spec(), [](const graph::Params& p) { return std::make_unique<ExportBvhNode>(p); }},
+      export_bvh_type(),
+      export_motion_type(),
   };
 }
 

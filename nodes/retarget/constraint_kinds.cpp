@@ -474,9 +474,8 @@ ConstraintKindTable kinds_for(const ConstraintSet& set, const ConstraintKindLook
   ConstraintKindTable table = ConstraintKindTable::builtin();
   for (const Constraint& c : set.constraints) {
     if (table.find(c.kind) != nullptr) continue;
-    std::shared_ptr<const void> found = lookup ? lookup(c.kind) : nullptr;
-    if (!found) throw_unknown_kind(c, table.names());
-    auto kind = std::static_pointer_cast<const ConstraintKind>(found);
+    std::shared_ptr<const ConstraintKind> kind = lookup ? lookup(c.kind) : nullptr;
+    if (!kind) throw_unknown_kind(c, table.names());
     if (kind->name() != c.kind)
       throw std::invalid_argument("constraint kind extension '" + c.kind + "' calls itself '" + kind->name() + "'");
     table.add(std::move(kind));

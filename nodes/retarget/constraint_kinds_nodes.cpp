@@ -5,13 +5,11 @@
 namespace kg::retarget {
 
 ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::RunContext& ctx) {
-  return kinds_for(set, [&ctx](const std::string& name) { return ctx.find_extension(kConstraintKindInterface, name); });
+  return kinds_for(set, [&ctx](const std::string& name) { return ctx.find<ConstraintKind>(name); });
 }
 
 ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::Registry& registry) {
-  return kinds_for(set, [&registry](const std::string& name) {
-    return registry.find_extension(kConstraintKindInterface, name);
-  });
+  return kinds_for(set, [&registry](const std::string& name) { return registry.find<ConstraintKind>(name); });
 }
 
 std::vector<graph::Extension> builtin_constraint_kind_extensions() {
@@ -19,12 +17,8 @@ std::vector<graph::Extension> builtin_constraint_kind_extensions() {
   const ConstraintKindTable table = ConstraintKindTable::builtin();
   for (const std::string& name : table.names()) {
     std::shared_ptr<const ConstraintKind> k = table.find_shared(name);
-    graph::Extension e;
-    e.interface = kConstraintKindInterface;
-    e.name = k->name();
-    e.doc = k->doc();
-    e.factory = std::shared_ptr<const void>(std::move(k));
-    out.push_back(std::move(e));
+    std::string kind_name = k->name(), doc = k->doc();
+    out.push_back(graph::Extension::make<ConstraintKind>(std::move(kind_name), std::move(k), std::move(doc)));
   }
   return out;
 }

@@ -9,13 +9,14 @@
 
 #include <yaml-cpp/yaml.h>
 
+#include "kg/base/atomic_file.hpp"
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/base/yaml_reader.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 #include "kg/retarget/target.hpp"
-#include "kg/base/atomic_file.hpp"
 
 namespace kg::retarget {
 
@@ -172,13 +173,6 @@ class Reader : public kg::YamlReader {
   const Skeleton& source_;
 };
 
-std::string lower_extension(const std::string& path) {
-  std::string ext = std::filesystem::path(path).extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
 }  // namespace
 
 LoadedTarget parse_target_yaml(std::shared_ptr<const Skeleton> source, std::string_view text,
@@ -190,7 +184,7 @@ LoadedTarget parse_target_yaml(std::shared_ptr<const Skeleton> source, std::stri
 
 LoadedTarget load_target(std::shared_ptr<const Skeleton> source, const std::string& path) {
   if (!source) throw std::invalid_argument("load_target: no source skeleton");
-  const std::string ext = lower_extension(path);
+  const std::string ext = kg::text::lower_extension(path);
   if (ext == ".yaml" || ext == ".yml") {
     return parse_target_yaml(std::move(source), kg::read_input_file(path, "target file"), path);
   }

@@ -4,24 +4,21 @@
 #include <memory>
 
 #include "kg/graph/plugin_abi.hpp"
+#include "kg/retarget/nodes.hpp"  // KG_DECLARE_INTERFACE of kg::retarget::ConstraintKind
 #include "ladder_kinds.hpp"
 
 namespace {
 
-kg::graph::Extension as_extension(std::shared_ptr<const kg::retarget::ConstraintKind> kind) {
-  kg::graph::Extension e;
-  e.interface = kg::retarget::kConstraintKindInterface;
-  e.name = kind->name();
-  e.doc = kind->doc();
-  // Converted from shared_ptr<const ConstraintKind> so the host's static_pointer_cast back is exact.
-  e.factory = std::shared_ptr<const void>(std::move(kind));
-  return e;
+using kg::retarget::ConstraintKind;
+
+void add_kind(kg::graph::PluginRecord& record, std::shared_ptr<const ConstraintKind> kind) {
+  record.add_extension<ConstraintKind>(kind->name(), kind, kind->doc());
 }
 
 kg::graph::PluginRecord make_record() {
   kg::graph::PluginRecord r{"kg.ladder", "1.0.0"};
-  r.extensions.push_back(as_extension(kg::ladder::make_rung_kind()));
-  r.extensions.push_back(as_extension(kg::ladder::make_rail_kind()));
+  add_kind(r, kg::ladder::make_rung_kind());
+  add_kind(r, kg::ladder::make_rail_kind());
   return r;
 }
 

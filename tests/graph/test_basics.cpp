@@ -16,6 +16,8 @@ using namespace kg;
 using namespace kg::graph;
 using kg::test::read_file;
 using kg::test::TempDir;
+using kg_test::TestAnswer;
+using kg_test::TestQuestion;
 
 namespace {
 
@@ -207,26 +209,77 @@ TEST_CASE("Registry::create_node suggests the nearest type and keeps a plugin's 
   CHECK(watch.expired());
 }
 
-TEST_CASE("Registry extensions: guarded by interface, owners kept") {
+TEST_CASE("Registry extensions: typed, guarded by interface, owners kept") {
   Registry r;
   auto owner = std::make_shared<int>(1);
   std::weak_ptr<int> watch = owner;
-  auto factory = std::make_shared<const std::string>("factory object");
-  r.add_extension({"kg.ConstraintKind", "ladder.rung", factory, "a rung"}, owner, "/p/ladder.so");
+  auto answer = std::make_shared<const TestAnswer>(TestAnswer{42});
+  r.add_extension(Extension::make<TestAnswer>("ladder.rung", answer, "a rung"), owner, "/p/ladder.so");
   owner.reset();
-  CHECK_THROWS_WITH(r.add_extension({"kg.ConstraintKind", "ladder.rung", factory, ""}, {}, "built-in"),
-                    Catch::Contains("/p/ladder.so") && Catch::Contains("built-in"));
-  r.add_extension({"kg.Other", "ladder.rung", factory, ""});  // same name, other interface: fine
+  CHECK_THROWS_WITH(
+      r.add_extension(Extension::make<TestAnswer>("ladder.rung", answer), {}, "built-in"),
+      Catch::Contains("extension kg.TestAnswer 'ladder.rung' from built-in is already registered by "
+                      "/p/ladder.so"));
+  CHECK_THROWS_WITH(r.add_extension(Extension::make<TestAnswer>("empty", nullptr)),
+                    Catch::Contains("extension kg.TestAnswer 'empty' from built-in has no factory"));
+  CHECK_THROWS_WITH(r.add_extension(Extension::make<TestAnswer>("", answer)),
+                    Catch::Contains("needs an interface and a name"));
+  CHECK_THROWS_WITH(r.add_extension(Extension{}), Catch::Contains("needs an interface and a name"));
+  // Same name, other interface: a separate entry.
+  r.add_extension(
+      Extension::make<TestQuestion>("ladder.rung", std::make_shared<const TestQuestion>(TestQuestion{"?"})));
+  CHECK(r.find<TestAnswer>("nope") == nullptr);
   CHECK(r.find_extension("kg.Nope", "ladder.rung") == nullptr);
-  CHECK(r.find_extension("kg.ConstraintKind", "nope") == nullptr);
-  auto got = r.find_extension("kg.ConstraintKind", "ladder.rung");
+  std::shared_ptr<const TestAnswer> got = r.find<TestAnswer>("ladder.rung");
   REQUIRE(got);
-  CHECK(*static_cast<const std::string*>(got.get()) == "factory object");
-  CHECK(r.extension_names("kg.ConstraintKind") == std::vector<std::string>{"ladder.rung"});
+  CHECK(got->value == 42);
+  CHECK(r.find<TestQuestion>("ladder.rung")->text == "?");
+  CHECK(r.names<TestAnswer>() == std::vector<std::string>{"ladder.rung"});
+  CHECK(r.names<TestQuestion>() == std::vector<std::string>{"ladder.rung"});
+  CHECK(r.extension_names("kg.TestAnswer") == r.names<TestAnswer>());
   r = Registry();
-  CHECK_FALSE(watch.expired());
+  CHECK_FALSE(watch.expired());  // the pointer handed out keeps the owner
   got.reset();
   CHECK(watch.expired());
+}
+
+TEST_CASE("Extension: typed access and kept_alive_by") {
+  const Extension e =
+      Extension::make<TestAnswer>("a", std::make_shared<const TestAnswer>(TestAnswer{7}), "doc");
+  CHECK(e.interface() == "kg.TestAnswer");
+  CHECK(e.name() == "a");
+  CHECK(e.doc() == "doc");
+  CHECK_FALSE(e.empty());
+  CHECK(e.get<TestAnswer>()->value == 7);
+  CHECK(e.get<TestQuestion>() == nullptr);
+  CHECK(Extension{}.get<TestAnswer>() == nullptr);
+
+  auto owner = std::make_shared<int>(1);
+  std::weak_ptr<int> watch = owner;
+  Extension kept = e.kept_alive_by(std::move(owner));
+  CHECK(kept.get<TestAnswer>().get() == e.get<TestAnswer>().get());
+  CHECK_FALSE(watch.expired());
+  kept = Extension{};
+  CHECK(watch.expired());
+}
+
+TEST_CASE("Registry: a node type made from the registry sees its extensions") {
+  Registry r;
+  r.add_extension(Extension::make<TestAnswer>("answer", std::make_shared<const TestAnswer>(TestAnswer{42})));
+  NodeSpec s{"test.made_with", 1, "", {}, {{"out", "kg.Scalar", true, ""}}, {}};
+  NodeType type{s, {}};
+  type.create_with_registry = [](const Params&, const Registry& registry) {
+    std::shared_ptr<const TestAnswer> answer = registry.find<TestAnswer>("answer");
+    if (!answer) throw std::runtime_error("no answer");
+    return kg_test::make_fn_node([answer](RunContext& ctx) { ctx.output("out", answer->value); });
+  };
+  r.add_node(type);
+  CHECK(r.create_node("test.made_with", {}) != nullptr);
+  Registry without;
+  without.add_node(type);
+  CHECK_THROWS_WITH(without.create_node("test.made_with", {}), "no answer");
+  NodeType none{NodeSpec{"test.none", 1, "", {}, {}, {}}, {}};
+  CHECK_THROWS_WITH(r.add_node(none), Catch::Contains("has no factory"));
 }
 
 TEST_CASE("JsonWriter writes nested structures and escapes strings") {

@@ -10,6 +10,8 @@
 
 using namespace kg;
 using namespace kg::graph;
+using kg_test::TestAnswer;
+using kg_test::TestQuestion;
 
 namespace {
 
@@ -379,16 +381,17 @@ connections:
 }
 
 TEST_CASE("a running node finds the registry's extensions through its context") {
-  // How a solver node meets a plugin's constraint kinds: RunContext::find_extension.
+  // How a solver node meets a plugin's constraint kinds: RunContext::find<T>.
   Registry registry;
-  auto factory = std::make_shared<const double>(42.0);
-  registry.add_extension({"kg.TestInterface", "answer", factory, "a number"});
+  registry.add_extension(Extension::make<TestAnswer>(
+      "answer", std::make_shared<const TestAnswer>(TestAnswer{42.0}), "a number"));
   NodeSpec s{"test.lookup", 1, "Outputs the extension it finds, or -1.", {}, {{"out", "kg.Scalar", true, "a number"}}, {}};
   registry.add_node({s, [](const Params&) {
                        return kg_test::make_fn_node([](RunContext& ctx) {
-                         const auto found = ctx.find_extension("kg.TestInterface", "answer");
-                         const auto missing = ctx.find_extension("kg.TestInterface", "question");
-                         ctx.output("out", found && !missing ? *static_cast<const double*>(found.get()) : -1.0);
+                         const std::shared_ptr<const TestAnswer> found = ctx.find<TestAnswer>("answer");
+                         const auto missing = ctx.find<TestAnswer>("question");
+                         const auto other = ctx.find<TestQuestion>("answer");  // same name, other interface
+                         ctx.output("out", found && !missing && !other ? found->value : -1.0);
                        });
                      }});
   const Graph g = load_graph_from_string("version: 1\nnodes:\n  look: {type: test.lookup}\n", "lookup.yaml", registry);

@@ -251,3 +251,15 @@ inline Registry test_registry(std::shared_ptr<Journal> journal = {},
 }
 
 }  // namespace kg_test
+
+// Two interfaces for the extension tests: an extension of one is never handed out as the other.
+namespace kg_test {
+struct TestAnswer {
+  double value = 0;
+};
+struct TestQuestion {
+  std::string text;
+};
+}  // namespace kg_test
+KG_DECLARE_INTERFACE(kg_test::TestAnswer, "kg.TestAnswer")
+KG_DECLARE_INTERFACE(kg_test::TestQuestion, "kg.TestQuestion")

@@ -352,21 +352,72 @@ TEST_CASE("graphs/convert.yaml never overwrites its input and refuses a malforme
   CHECK_FALSE(fs::exists(work / "never.bvh"));
 }
 
+TEST_CASE("graphs/convert.yaml refuses at load an extension no motion format claims", "[graphs]") {
+  TempDir work;
+  fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
+  const std::string readers = "readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH)",
+                    writers = "writers: .bvh (BVH)";
+  // Writing .fbx: no writer claims it (it used to get BVH text). Invalid graph, nothing written.
+  const fs::path fbx = work / "x.fbx";
+  Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                        "input=" + (work / "clip.bvh").string(), "--set", "output=" + fbx.string()});
+  INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Catch::Contains("convert.yaml:") &&
+                        Catch::Contains("node 'write' (io.export_motion): " + fbx.string() +
+                                        ": no motion writer claims '.fbx'; " + writers + "; " + readers));
+  CHECK_FALSE(fs::exists(fbx));
+  // The extension in any case picks BVH.
+  r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                 "input=" + (work / "clip.bvh").string(), "--set",
+                 "output=" + (work / "UPPER.BVH").string()});
+  INFO(show(r));
+  CHECK(r.code == 0);
+  CHECK(kg::test::read_file(work / "UPPER.BVH").rfind("HIERARCHY\n", 0) == 0);
+  // Reading .c3d: the same, naming the readers first; `validate` says so too.
+  work.write("clip.c3d", "not a motion");
+  for (const char* verb : {"run", "validate"}) {
+    r = kinegraph({verb, (kSource / "graphs/convert.yaml").string(), "--set",
+                   "input=" + (work / "clip.c3d").string(), "--set",
+                   "output=" + (work / "c3d.bvh").string()});
+    INFO(show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err, Catch::Contains("node 'source' (io.import_motion): " + (work / "clip.c3d").string() +
+                                      ": no motion reader claims '.c3d'; " + readers + "; " + writers));
+  }
+  CHECK_FALSE(fs::exists(work / "c3d.bvh"));
+}
+
 TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itself, the report", "[graphs]") {
   const fs::path asf = kData / "cmu/asf_amc/16.asf", amc = kData / "cmu/asf_amc/16_15.amc";
   TempDir work;
   fs::copy_file(kSource / "graphs/convert.yaml", work / "convert.yaml");
   fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
+  // convert.yaml's io.export_motion refuses .yaml and .asf outputs at load (no writer claims
+  // them); io.export_bvh writes BVH under any name, so the run itself must refuse.
+  work.write("export_bvh.yaml",
+             "version: 1\nvariables:\n  input: {required: true}\n  output: {required: true}\nnodes:\n"
+             "  source: {type: io.import_motion, params: {path: \"${input}\"}}\n"
+             "  write: {type: io.export_bvh, params: {path: \"${output}\"}}\n"
+             "connections:\n  - {from: source.motion, to: write.motion}\n");
   const std::string graph_before = kg::test::read_file(work / "convert.yaml");
   const std::string clip_before = kg::test::read_file(work / "clip.bvh");
 
-  // The graph file as the output: the export fails, the graph is intact.
+  // The graph file as the output: refused at load by convert.yaml, by the export of the other;
+  // the graph is intact.
   Result r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
                         "--set", "output=" + (work / "convert.yaml").string()});
   INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Catch::Contains("no motion writer claims '.yaml'"));
+  CHECK(kg::test::read_file(work / "convert.yaml") == graph_before);
+  const std::string other_before = kg::test::read_file(work / "export_bvh.yaml");
+  r = kinegraph({"run", (work / "export_bvh.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
+                 "--set", "output=" + (work / "export_bvh.yaml").string()});
+  INFO(show(r));
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("never overwritten"));
-  CHECK(kg::test::read_file(work / "convert.yaml") == graph_before);
+  CHECK(kg::test::read_file(work / "export_bvh.yaml") == other_before);
 
   // The run's report written over its input clip is refused; the clip is intact.
   r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(), "--set",
@@ -386,6 +437,12 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
   r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "16_15.amc").string(), "--set",
                  "output=" + (work / "16.asf").string()});
   INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK(kg::test::read_file(work / "16.asf") == asf_before);
+  r = kinegraph({"run", (work / "export_bvh.yaml").string(), "--set",
+                 "input=" + (work / "16_15.amc").string(), "--set", "output=" + (work / "16.asf").string()});
+  INFO(show(r));
   CHECK(r.code == 1);
+  CHECK_THAT(r.err, Catch::Contains("never overwritten"));
   CHECK(kg::test::read_file(work / "16.asf") == asf_before);
 }

@@ -19,7 +19,7 @@
 #include "kg/graph/registry.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
-#include "kg/retarget/constraints.hpp"
+#include "kg/retarget/nodes.hpp"  // kg.ConstraintKind
 #include "kg/synth/synthesize.hpp"
 
 namespace {
@@ -95,9 +95,9 @@ struct LadderKinds {
   kg::graph::PluginLoader loader{registry};
   LadderKinds() { loader.load_file(fs::path(KG_PLUGIN_DIR) / "kg_ladder.so"); }
   std::shared_ptr<const kg::retarget::ConstraintKind> kind(const std::string& name) const {
-    auto found = registry.find_extension(kg::retarget::kConstraintKindInterface, name);
+    auto found = registry.find<kg::retarget::ConstraintKind>(name);
     REQUIRE(found != nullptr);
-    return std::static_pointer_cast<const kg::retarget::ConstraintKind>(found);
+    return found;
   }
 };
 

@@ -236,9 +236,19 @@ std::vector<std::map<std::string, Eigen::Vector3d>> reference_positions(const st
   return out;
 }
 
+// The ASF/AMC nodes and the motion formats io.import_motion picks from.
+const kg::graph::Registry& io_registry() {
+  static const kg::graph::Registry registry = [] {
+    kg::graph::Registry r = kg::test::registry_of(kg::asf_amc_node_types());
+    for (kg::graph::Extension& format : kg::io::builtin_motion_format_extensions())
+      r.add_extension(std::move(format));
+    return r;
+  }();
+  return registry;
+}
+
 const kg::graph::NodeType& node_type(const std::string& name) {
-  static const kg::graph::Registry registry = kg::test::registry_of(kg::asf_amc_node_types());
-  return kg::test::node_type(registry, name);
+  return kg::test::node_type(io_registry(), name);
 }
 
 bool contains(const std::vector<std::string>& lines, const std::string& part) {
@@ -601,28 +611,36 @@ TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][no
     CHECK(std::get<std::string>(ctx.figures.at("units")) == "asf");
     CHECK(ctx.logged("120 fps"));
   }
+  const kg::graph::Registry& registry = io_registry();
   {  // the skeleton guessed from the subject prefix, and said so
-    const NodeContext ctx = run_node(any_type, params_for(any_type.spec, {{"path", amc.string()}}));
+    const NodeContext ctx =
+        run_node(registry, "io.import_motion", params_for(any_type.spec, {{"path", amc.string()}}));
     CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
     CHECK(ctx.logged("16.asf"));
     CHECK(ctx.logged("skeleton not given"));
   }
   {  // a .bvh dispatches to the BVH reader
     const NodeContext ctx =
-        run_node(any_type, params_for(any_type.spec, {{"path", bvh.string()}, {"up", std::string("y")}}));
+        run_node(registry, "io.import_motion",
+                 params_for(any_type.spec, {{"path", bvh.string()}, {"up", std::string("y")}}));
     CHECK(ctx.outputs.at("motion").get<Motion>().skeleton->find_joint("lhipjoint") < 0);
     CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
   }
   {  // an .amc without a findable .asf, a .bvh with a skeleton, an unknown extension
     const kg::test::TempDir dir;
     const fs::path lone = dir.write("lone.amc", kAmc);
-    CHECK_THROWS_WITH(run_node(any_type, params_for(any_type.spec, {{"path", lone.string()}})),
-                      Catch::Contains("needs its skeleton"));
     CHECK_THROWS_WITH(
-        run_node(any_type, params_for(any_type.spec, {{"path", bvh.string()}, {"skeleton", asf.string()}})),
+        run_node(registry, "io.import_motion", params_for(any_type.spec, {{"path", lone.string()}})),
+        Catch::Contains("needs its skeleton"));
+    CHECK_THROWS_WITH(
+        run_node(registry, "io.import_motion",
+                 params_for(any_type.spec, {{"path", bvh.string()}, {"skeleton", asf.string()}})),
         Catch::Contains("holds its own skeleton"));
-    CHECK_THROWS_WITH(run_node(any_type, params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}})),
-                      Catch::Contains(".bvh or .amc"));
+    CHECK_THROWS_WITH(
+        run_node(registry, "io.import_motion",
+                 params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}})),
+        Catch::Contains(
+            "no motion reader claims '.c3d'; readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH)"));
   }
 }
 

@@ -7,7 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include "kg/graph/plugin_loader.hpp"
-#include "kg/retarget/constraints.hpp"
+#include "kg/retarget/nodes.hpp"  // kg.ConstraintKind
 #include "plugin_test_util.hpp"
 
 using namespace kg_test;
@@ -26,9 +26,9 @@ struct Ladder {
   PluginLoader loader{registry};
   Ladder() { loader.load_file(ladder_library()); }
   std::shared_ptr<const ConstraintKind> kind(const std::string& name) const {
-    std::shared_ptr<const void> found = registry.find_extension(kg::retarget::kConstraintKindInterface, name);
+    std::shared_ptr<const ConstraintKind> found = registry.find<ConstraintKind>(name);
     REQUIRE(found != nullptr);
-    return std::static_pointer_cast<const ConstraintKind>(found);
+    return found;
   }
 };
 
@@ -60,8 +60,7 @@ TEST_CASE("the ladder plugin exports two constraint kinds", "[ladder]") {
   Ladder ladder;
   REQUIRE(ladder.loader.loaded().size() == 1);
   CHECK(ladder.loader.loaded().at(0).id == "kg.ladder");
-  CHECK(ladder.registry.extension_names(kg::retarget::kConstraintKindInterface) ==
-        std::vector<std::string>{"ladder.rail", "ladder.rung"});
+  CHECK(ladder.registry.names<ConstraintKind>() == std::vector<std::string>{"ladder.rail", "ladder.rung"});
   CHECK(ladder.registry.node_type_names().empty());
   for (const char* name : {"ladder.rung", "ladder.rail"}) {
     auto kind = ladder.kind(name);

@@ -314,7 +314,7 @@ TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknow
   // Through a registry holding the built-ins as extensions and the plugin-like kind.
   graph::Registry registry;
   for (graph::Extension& e : builtin_constraint_kind_extensions()) registry.add_extension(std::move(e));
-  CHECK(registry.extension_names(kConstraintKindInterface).size() == 7);
+  CHECK(registry.names<ConstraintKind>().size() == 7);
   SECTION("unknown kind: the message lists known kinds") {
     try {
       kinds_for(set, registry);
@@ -328,13 +328,13 @@ TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknow
     CHECK_THROWS_WITH(kinds_for(set, registry), Catch::Contains("unknown kind 'positon'") &&
                                                     Catch::Contains("did you mean 'position'?"));
     // A context without a registry finds no extension either.
-    CHECK_THROWS_WITH(kinds_for(set, [](const std::string&) { return std::shared_ptr<const void>(); }),
-                      Catch::Contains("unknown kind 'positon'"));
+    CHECK_THROWS_WITH(
+        kinds_for(set, [](const std::string&) { return std::shared_ptr<const ConstraintKind>(); }),
+        Catch::Contains("unknown kind 'positon'"));
   }
   SECTION("found through the registry and through a RunContext") {
-    registry.add_extension({kConstraintKindInterface, "test.height",
-                            std::shared_ptr<const void>(std::shared_ptr<const ConstraintKind>(std::make_shared<HeightKind>())),
-                            "a point's height"});
+    registry.add_extension(graph::Extension::make<ConstraintKind>(
+        "test.height", std::make_shared<HeightKind>(), "a point's height"));
     const ConstraintKindTable a = kinds_for(set, registry);
     REQUIRE(a.find("test.height") != nullptr);
     CHECK(a.names().size() == 8);
@@ -348,8 +348,8 @@ TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknow
     CHECK_NOTHROW(check_constraints(set, b));
   }
   SECTION("an extension registered under another name than its own is refused") {
-    registry.add_extension({kConstraintKindInterface, "test.height",
-                            std::shared_ptr<const void>(t.find_shared("distance")), "wrong"});
+    registry.add_extension(
+        graph::Extension::make<ConstraintKind>("test.height", t.find_shared("distance"), "wrong"));
     CHECK_THROWS_WITH(kinds_for(set, registry), Catch::Contains("calls itself 'distance'"));
   }
 }

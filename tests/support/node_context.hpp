@@ -94,13 +94,17 @@ inline graph::Params params_for(const graph::Registry& registry, const std::stri
 // throws propagates. The context returned holds the outputs, figures and log lines.
 inline NodeContext run_node(const graph::NodeType& type, const graph::Params& params,
                             std::map<std::string, graph::Value> inputs = {}) {
+  if (!type.create)
+    throw std::logic_error(
+        "node type " + type.spec.type +
+        " is made from a registry (create_with_registry): " + "run it with run_node(registry, ...)");
   NodeContext ctx(params);
   ctx.inputs = std::move(inputs);
   type.create(params)->run(ctx);
   return ctx;
 }
-// The same through Registry::create_node, which keeps a plugin's library loaded while it runs;
-// the node finds the registry's extensions.
+// The same through Registry::create_node, which keeps a plugin's library loaded while it runs
+// and gives node types made from a registry theirs; the node finds the registry's extensions.
 inline NodeContext run_node(const graph::Registry& registry, const std::string& type,
                             const graph::Params& params, std::map<std::string, graph::Value> inputs = {}) {
   NodeContext ctx(params);

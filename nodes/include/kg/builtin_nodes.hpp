@@ -9,7 +9,7 @@
 namespace kg {
 
 std::vector<graph::NodeType> motion_node_types();  // motion.resample, motion.frame_range (nodes/motion)
-std::vector<graph::NodeType> bvh_node_types();     // io.import_bvh, io.export_bvh (nodes/io)
+std::vector<graph::NodeType> bvh_node_types();     // io.import_bvh, io.export_bvh, io.export_motion (io)
 std::vector<graph::NodeType> asf_amc_node_types(); // io.import_asf_amc, io.import_motion (nodes/io)
 std::vector<graph::NodeType> synth_node_types();   // motion.synthesize (nodes/synth)
 // nodes/retarget: retarget.target, retarget.constraints_on_target, retarget.initial_estimate,
@@ -25,7 +25,8 @@ std::vector<graph::NodeType> retime_contact_node_types();      // retime.contact
 
 // Every built-in node type (the lists above, in that order).
 std::vector<graph::NodeType> builtin_node_types();
-// Every built-in extension: the constraint kinds of the spacetime solver (kg.ConstraintKind).
+// Every built-in extension: the constraint kinds of the spacetime solver (kg.ConstraintKind) and
+// the motion file formats (kg.MotionFormat: BVH, ASF/AMC).
 std::vector<graph::Extension> builtin_extensions();
 // Registers builtin_node_types() and builtin_extensions() through the same Registry API as
 // plugins (tests use this; the CLI loads them as the kg_builtin_nodes module instead).

@@ -1,10 +1,14 @@
 // Number <-> text in one place, so params, messages, reports and graph
-// files print and parse numbers alike (shortest text that reads back to the same double).
+// files print and parse numbers alike (shortest text that reads back to the same double); and
+// the file extension files are told apart by.
 #pragma once
 
+#include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdint>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -52,6 +56,19 @@ inline std::optional<double> parse_double(std::string_view text) {
   auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), v);
   if (ec != std::errc() || end != text.data() + text.size() || std::isnan(v)) return std::nullopt;
   return v;
+}
+
+// `s` with ASCII letters lower-cased (other bytes as they are).
+inline std::string ascii_lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// The extension of the file `path` names, with its dot, lower-cased ("walk.BVH" -> ".bvh"; ""
+// for "walk" or "dir/.hidden"), so that dispatch on file types ignores case.
+inline std::string lower_extension(const std::filesystem::path& path) {
+  return ascii_lower(path.extension().string());
 }
 
 }  // namespace kg::text

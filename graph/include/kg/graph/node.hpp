@@ -22,6 +22,7 @@
 #include <string>
 #include <variant>
 
+#include "kg/graph/extension.hpp"
 #include "kg/graph/node_spec.hpp"
 #include "kg/graph/params.hpp"
 #include "kg/graph/value.hpp"
@@ -45,8 +46,15 @@ class RunContext {
   // A line for the user (stderr, prefixed with the node id).
   virtual void log(const std::string& message) = 0;
 
-  // A registry extension (registry.hpp) by interface and name, e.g. a constraint kind a solver
-  // node meets in its input data; null when absent. Contexts without a registry return null.
+  // The registry extension `name` of interface T (extension.hpp), e.g. a constraint kind a solver
+  // node meets in its input data; null when absent or when the context has no registry.
+  template <Interface T>
+  std::shared_ptr<const T> find(const std::string& name) const {
+    return std::static_pointer_cast<const T>(find_extension(InterfaceName<T>::value, name));
+  }
+
+  // The type-erased layer under find<T> that contexts implement by forwarding to their
+  // registry's find_extension (which guards the interface); nodes call find<T>.
   virtual std::shared_ptr<const void> find_extension(const std::string& interface, const std::string& name) const {
     return nullptr;
   }
@@ -79,9 +87,16 @@ class Node {
 // combination of params the spec cannot express; the loader reports it with the node's place.
 using NodeFactory = std::function<std::unique_ptr<Node>(const Params&)>;
 
+// The same for a node that picks one of the registry's extensions by its params when it is made
+// (io.export_motion: the kg.MotionFormat claiming its path's extension), so that a missing one
+// fails at load, at the node's place. `registry` is the one making the node (not owned): keep
+// what find<T> hands out, never the registry.
+using RegistryNodeFactory = std::function<std::unique_ptr<Node>(const Params&, const Registry&)>;
+
 struct NodeType {
   NodeSpec spec;
   NodeFactory create;
+  RegistryNodeFactory create_with_registry{};  // when set, used instead of `create`
 };
 
 }  // namespace kg::graph

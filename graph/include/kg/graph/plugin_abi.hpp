@@ -6,6 +6,7 @@
 //   static kg::graph::PluginRecord make_record() {
 //     kg::graph::PluginRecord r{"kg.lowpass", "1.0.0"};
 //     r.nodes.push_back(lowpass_node_type());
+//     r.add_extension<kg::retarget::ConstraintKind>("ladder.rung", make_rung_kind(), "a rung");
 //     return r;
 //   }
 //   KG_PLUGIN(make_record)
@@ -16,23 +17,36 @@
 #pragma once
 
 #include <cstdint>
+#include <memory>
 #include <string>
+#include <type_traits>
+#include <utility>
 #include <vector>
 
 #include <boost/dll/alias.hpp>
 
+#include "kg/graph/extension.hpp"
 #include "kg/graph/node.hpp"
 #include "kg/graph/registry.hpp"
 
 namespace kg::graph {
 
-inline constexpr std::uint32_t kPluginAbiVersion = 2;
+// 3: typed extensions (extension.hpp) and NodeType::create_with_registry.
+inline constexpr std::uint32_t kPluginAbiVersion = 3;
 
 struct PluginRecord {
   std::string id;       // unique, e.g. "kg.lowpass"
   std::string version;  // the plugin's own version, e.g. "1.0.0"
   std::vector<NodeType> nodes{};
   std::vector<Extension> extensions{};
+
+  // An extension of interface T (declared with KG_DECLARE_INTERFACE), e.g. a constraint kind or
+  // a motion format; `object` may be of a class derived from T.
+  template <Interface T>
+  void add_extension(std::string name, std::type_identity_t<std::shared_ptr<const T>> object,
+                     std::string doc = {}) {
+    extensions.push_back(Extension::make<T>(std::move(name), std::move(object), std::move(doc)));
+  }
 };
 
 using PluginAbiVersionFn = std::uint32_t();

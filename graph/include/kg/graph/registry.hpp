@@ -1,10 +1,12 @@
-// The one registry of node types and other extensions (constraint kinds, ...). Built-in nodes
-// and plugins register through the same calls (DESIGN.md 6). Entries from a plugin hold a
-// shared_ptr to its library, so nothing made from it outlives the code behind it.
+// The one registry of node types and other extensions (constraint kinds, motion formats, ...).
+// Built-in nodes and plugins register through the same calls (DESIGN.md 6). Entries from a
+// plugin hold a shared_ptr to its library, so nothing made from it outlives the code behind it.
 //
 //   Registry registry;
 //   registry.add_node(my_type);                       // built-in: no owner
 //   auto node = registry.create_node("io.import_bvh", params);
+//   registry.add_extension(Extension::make<ConstraintKind>("ladder.rung", kind, "a rung"));
+//   std::shared_ptr<const ConstraintKind> k = registry.find<ConstraintKind>("ladder.rung");
 #pragma once
 
 #include <map>
@@ -12,18 +14,10 @@
 #include <string>
 #include <vector>
 
+#include "kg/graph/extension.hpp"
 #include "kg/graph/node.hpp"
 
 namespace kg::graph {
-
-// A named factory of some interface graph/ does not know (`kg.ConstraintKind`, ...). The
-// consumer casts `factory` to the interface it declared; `interface` guards the cast.
-struct Extension {
-  std::string interface;             // e.g. "kg.ConstraintKind"
-  std::string name;                  // e.g. "ladder.rung"
-  std::shared_ptr<const void> factory;
-  std::string doc;
-};
 
 // A node created by the registry; holds its plugin's library (if any) until destroyed.
 using NodePtr = std::shared_ptr<const Node>;
@@ -46,7 +40,21 @@ class Registry {
   // The owner of a node type's library (null for built-ins): values made by its nodes keep it.
   std::shared_ptr<const void> node_owner(const std::string& type) const;
 
-  // Null when absent or of another interface.
+  // The extension `name` of interface T (KG_DECLARE_INTERFACE); null when absent. The pointer
+  // also keeps a plugin's library loaded.
+  template <Interface T>
+  std::shared_ptr<const T> find(const std::string& name) const {
+    return std::static_pointer_cast<const T>(find_extension(InterfaceName<T>::value, name));
+  }
+  // The names of every extension of interface T, sorted.
+  template <Interface T>
+  std::vector<std::string> names() const {
+    return extension_names(InterfaceName<T>::value);
+  }
+
+  // The type-erased layer under find<T> and names<T>, by interface name, for RunContext
+  // implementations to forward (RunContext::find_extension) and for messages; null when absent
+  // or of another interface. Nodes and plugins use find<T>.
   std::shared_ptr<const void> find_extension(const std::string& interface, const std::string& name) const;
   std::vector<std::string> extension_names(const std::string& interface) const;  // sorted
 

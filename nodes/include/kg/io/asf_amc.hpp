@@ -32,6 +32,7 @@
 #include <vector>
 
 #include "kg/io/import_options.hpp"
+#include "kg/io/motion_format.hpp"  // import_motion (a .bvh or an .amc by extension), long declared here
 #include "kg/motion/motion.hpp"
 #include "kg/motion/skeleton.hpp"
 
@@ -101,12 +102,5 @@ ImportedMotion import_asf_amc(const std::string& asf_path, const std::string& am
 // The ASF an AMC most likely belongs to: the CMU subject prefix of its name in the same folder
 // ("dir/16_15.amc" -> "dir/16.asf"); "" when the name has no '_' or that file does not exist.
 std::string guess_asf_for_amc(const std::string& amc_path);
-
-// A .bvh or .amc by extension (case-insensitive). For an .amc, `skeleton_path` is its .asf;
-// when empty, guess_asf_for_amc's answer is used and said in the notes, and without one the
-// call throws std::invalid_argument asking for the skeleton. For a .bvh, skeleton_path must be
-// empty.
-ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
-                             const ImportOptions& options);
 
 }  // namespace kg::io

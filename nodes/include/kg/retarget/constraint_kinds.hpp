@@ -70,9 +70,9 @@ class ConstraintKindTable {
 // when unknown.
 using KindFinder = std::function<const ConstraintKind*(const std::string& name)>;
 
-// Looks up a `kg.ConstraintKind` extension by kind name: the stored factory must be a
-// std::shared_ptr<const ConstraintKind> converted to std::shared_ptr<const void>. Null when absent.
-using ConstraintKindLookup = std::function<std::shared_ptr<const void>(const std::string& name)>;
+// A kind by name among the kinds registered beside the built-ins (a registry's `kg.ConstraintKind`
+// extensions, kg/retarget/nodes.hpp); null when absent.
+using ConstraintKindLookup = std::function<std::shared_ptr<const ConstraintKind>(const std::string& name)>;
 
 // builtin() plus every kind `set` names that is not built in, found through `lookup`. Throws
 // std::invalid_argument "constraint 'label': unknown kind 'x' (known: a, b, ...; did you mean 'y'?)"

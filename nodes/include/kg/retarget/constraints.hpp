@@ -107,6 +107,4 @@ class ConstraintKind {
                         Eigen::Ref<Eigen::MatrixXd> d_values) const = 0;
 };
 
-inline constexpr const char* kConstraintKindInterface = "kg.ConstraintKind";
-
 }  // namespace kg::retarget

@@ -2,6 +2,7 @@
 // Maths code includes the area's own headers (target.hpp, spacetime.hpp, ...) only.
 #pragma once
 
+#include "kg/graph/extension.hpp"
 #include "kg/graph/node.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/graph/value.hpp"
@@ -14,6 +15,8 @@
 KG_DECLARE_TYPE(kg::retarget::ConstraintSet, "kg.Constraints")
 KG_DECLARE_TYPE(kg::retarget::KeySpacing, "kg.KeySpacing")
 KG_DECLARE_TYPE(kg::retarget::Target, "kg.Target")
+// The constraint kinds of the solvers, built in or from plugins (registry extensions).
+KG_DECLARE_INTERFACE(kg::retarget::ConstraintKind, "kg.ConstraintKind")
 
 namespace kg::retarget {
 
@@ -22,8 +25,8 @@ namespace kg::retarget {
 ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::RunContext& ctx);
 ConstraintKindTable kinds_for(const ConstraintSet& set, const graph::Registry& registry);
 
-// The built-in kinds as registry extensions (interface kConstraintKindInterface), so that a
-// registry lists and hands them out like plugin kinds.
+// The built-in kinds as kg.ConstraintKind registry extensions, so that a registry lists and hands
+// them out like plugin kinds.
 std::vector<graph::Extension> builtin_constraint_kind_extensions();
 
 // The node `retarget.per_frame_ik` (also listed by retarget_metrics_node_types).

@@ -1,0 +1,75 @@
+// Motion file formats told apart by file extension: each format claims its extensions and
+// brings a reader, a writer or both. io.import_motion and io.export_motion pick the format that
+// claims a path's extension among those registered (kg.MotionFormat extensions, kg/io/nodes.hpp:
+// the built-in BVH and ASF/AMC and any a plugin adds), so a new format plugs in without touching
+// the dispatch.
+//
+//   const MotionFormats formats = builtin_motion_formats();
+//   std::shared_ptr<const MotionFormat> bvh = motion_writer_for("out/walk.BVH", formats);
+//   bvh->write(os, motion, {.units = "cm"});
+//   ImportedMotion in = motion_reader_for("16_15.amc", formats)->read("16_15.amc", "16.asf", {});
+#pragma once
+
+#include <functional>
+#include <memory>
+#include <ostream>
+#include <string>
+#include <vector>
+
+#include "kg/io/import_options.hpp"
+#include "kg/motion/motion.hpp"
+
+namespace kg::io {
+
+// What every writer is asked for; a writer ignores what its format cannot express.
+struct MotionWriteOptions {
+  // Length unit written: "source" (the unit the clip was read in,
+  // skeleton->source_unit_metres), "m", "cm", "mm" or "inch".
+  std::string units = "source";
+  int precision = 6;  // digits after the decimal point, 1..12 (trailing zeros dropped)
+};
+
+// Reads the motion file `path` (and, for formats keeping the skeleton apart, `skeleton_path`:
+// "" lets the reader find it or refuse) to skeleton.hpp's conventions. Throws kg::Error with
+// file:line for a malformed file, std::invalid_argument for wrong arguments.
+using MotionReader = std::function<ImportedMotion(const std::string& path, const std::string& skeleton_path,
+                                                  const ImportOptions& options)>;
+// Writes `motion` (metres, radians, +Y up) to `os` in the file's units and axes.
+using MotionWriter =
+    std::function<void(std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options)>;
+
+struct MotionFormat {
+  std::string name;                     // unique, shown in messages: "BVH", "ASF/AMC"
+  std::vector<std::string> extensions;  // motion files it claims, with the dot: {".bvh"}; any case
+  std::string skeleton_extension;       // its separate skeleton file's (".asf"); "" when none
+  std::string doc;
+  MotionReader read;   // empty: the format reads nothing
+  MotionWriter write;  // empty: the format writes nothing
+};
+
+using MotionFormats = std::vector<std::shared_ptr<const MotionFormat>>;
+
+// BVH (.bvh: reads and writes; bvh.hpp) and ASF/AMC (.amc with its .asf: reads; asf_amc.hpp).
+std::shared_ptr<const MotionFormat> bvh_format();
+std::shared_ptr<const MotionFormat> asf_amc_format();
+MotionFormats builtin_motion_formats();  // {asf_amc_format(), bvh_format()}
+
+// The one format of `formats` that reads (writes) files named like `path`, by its extension
+// compared case-insensitively (null entries are skipped). Throws std::invalid_argument naming
+// the file and what is available when none does:
+//   "x.fbx: no motion writer claims '.fbx'; writers: .bvh (BVH); readers: .amc (ASF/AMC,
+//    skeleton .asf), .bvh (BVH)"
+// (a reader's message lists the readers first), and naming both when two formats do.
+std::shared_ptr<const MotionFormat> motion_reader_for(const std::string& path, const MotionFormats& formats);
+std::shared_ptr<const MotionFormat> motion_writer_for(const std::string& path, const MotionFormats& formats);
+
+// motion_reader_for(path, formats)->read(path, skeleton_path, options): a .bvh or an .amc with
+// the built-in formats. For an .amc, `skeleton_path` is its .asf; when empty, guess_asf_for_amc's
+// answer is used and said in the notes, and without one the call throws std::invalid_argument
+// asking for the skeleton. For a .bvh, skeleton_path must be empty.
+ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options, const MotionFormats& formats);
+ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options);
+
+}  // namespace kg::io

@@ -1,0 +1,146 @@
+// The built-in motion formats and the dispatch by file extension (motion_format.hpp).
+#include "kg/io/motion_format.hpp"
+
+#include <algorithm>
+#include <filesystem>
+#include <stdexcept>
+#include <utility>
+
+#include "kg/base/text.hpp"
+#include "kg/io/asf_amc.hpp"
+#include "kg/io/bvh.hpp"
+
+namespace kg::io {
+
+namespace {
+
+std::string file_name_of(const std::string& path) {
+  return std::filesystem::path(path).filename().string();
+}
+
+ImportedMotion read_bvh_file(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options) {
+  if (!skeleton_path.empty()) {
+    throw std::invalid_argument(path + ": a BVH file holds its own skeleton; expected skeleton \"\", got \"" +
+                                skeleton_path + "\"");
+  }
+  return import_bvh(path, options);
+}
+
+ImportedMotion read_amc_file(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options) {
+  std::string asf = skeleton_path;
+  std::vector<std::string> notes;
+  if (asf.empty()) {
+    asf = guess_asf_for_amc(path);
+    if (asf.empty()) {
+      throw std::invalid_argument(
+          path +
+          ": an AMC file needs its skeleton: set skeleton to the .asf file (none found "
+          "by the subject prefix of the name, e.g. 16_15.amc -> 16.asf)");
+    }
+    notes.push_back(file_name_of(path) + ": skeleton not given; using " + asf +
+                    " (the subject prefix of the name)");
+  }
+  ImportedMotion out = import_asf_amc(asf, path, options);
+  out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
+  return out;
+}
+
+void write_bvh_file(std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
+  write_bvh(os, motion, BvhWriteOptions{.units = options.units, .precision = options.precision});
+}
+
+bool claims(const MotionFormat& format, const std::string& lower_ext) {
+  return std::any_of(format.extensions.begin(), format.extensions.end(),
+                     [&](const std::string& e) { return text::ascii_lower(e) == lower_ext; });
+}
+
+// ".amc (ASF/AMC, skeleton .asf), .bvh (BVH)": every extension of the formats that read (or
+// write), sorted; "none" when there is none.
+std::string listing(const MotionFormats& formats, bool readers) {
+  std::vector<std::string> items;
+  for (const auto& f : formats) {
+    if (!f || !(readers ? static_cast<bool>(f->read) : static_cast<bool>(f->write))) continue;
+    const std::string what =
+        readers && !f->skeleton_extension.empty() ? f->name + ", skeleton " + f->skeleton_extension : f->name;
+    for (const std::string& e : f->extensions) items.push_back(text::ascii_lower(e) + " (" + what + ")");
+  }
+  if (items.empty()) return "none";
+  std::sort(items.begin(), items.end());
+  std::string out;
+  for (const std::string& item : items) out += (out.empty() ? "" : ", ") + item;
+  return out;
+}
+
+std::shared_ptr<const MotionFormat> format_for(const std::string& path, const MotionFormats& formats,
+                                               bool reading) {
+  const std::string ext = text::lower_extension(path);
+  const char* role = reading ? "reader" : "writer";
+  std::vector<std::shared_ptr<const MotionFormat>> found;
+  if (!ext.empty())
+    for (const auto& f : formats)
+      if (f && (reading ? static_cast<bool>(f->read) : static_cast<bool>(f->write)) && claims(*f, ext))
+        found.push_back(f);
+  if (found.size() == 1) return found.front();
+
+  const std::string available =
+      reading ? "readers: " + listing(formats, true) + "; writers: " + listing(formats, false)
+              : "writers: " + listing(formats, false) + "; readers: " + listing(formats, true);
+  if (found.empty()) {
+    const std::string what = ext.empty() ? std::string("a file without an extension") : "'" + ext + "'";
+    throw std::invalid_argument(path + ": no motion " + role + " claims " + what + "; " + available);
+  }
+  std::string names;
+  for (const auto& f : found) names += (names.empty() ? "" : " and ") + f->name;
+  throw std::invalid_argument(path + ": '" + ext + "' is claimed by " + std::to_string(found.size()) +
+                              " motion " + role + "s, " + names + "; " + available);
+}
+
+}  // namespace
+
+std::shared_ptr<const MotionFormat> bvh_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "BVH",
+      .extensions = {".bvh"},
+      .skeleton_extension = {},
+      .doc = "Biovision hierarchy: the skeleton and its channels in one text file (bvh.hpp)",
+      .read = &read_bvh_file,
+      .write = &write_bvh_file,
+  });
+}
+
+std::shared_ptr<const MotionFormat> asf_amc_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "ASF/AMC",
+      .extensions = {".amc"},
+      .skeleton_extension = ".asf",
+      .doc = "Acclaim motion (.amc) on its skeleton (.asf), as in the CMU database (asf_amc.hpp)",
+      .read = &read_amc_file,
+      .write = {},
+  });
+}
+
+MotionFormats builtin_motion_formats() {
+  return {asf_amc_format(), bvh_format()};
+}
+
+std::shared_ptr<const MotionFormat> motion_reader_for(const std::string& path, const MotionFormats& formats) {
+  return format_for(path, formats, true);
+}
+
+std::shared_ptr<const MotionFormat> motion_writer_for(const std::string& path, const MotionFormats& formats) {
+  return format_for(path, formats, false);
+}
+
+ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options, const MotionFormats& formats) {
+  return motion_reader_for(path, formats)->read(path, skeleton_path, options);
+}
+
+ImportedMotion import_motion(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options) {
+  return import_motion(path, skeleton_path, options, builtin_motion_formats());
+}
+
+}  // namespace kg::io
