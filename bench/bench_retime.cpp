@@ -545,7 +545,7 @@ class NaiveObjective final : public retime::PathObjective {
         external_.push_back({.joint = joints[static_cast<std::size_t>(j)],
                              .point = hull.points.col(j),
                              .force = hull.force_directions.col(j) * lambda_[j]});
-    retime::inverse_dynamics(c_.limited, c_.clip.values.row(f), qd_, qdd_, c_.hulls.gravity, external_, ws_,
+    body::inverse_dynamics(c_.limited, c_.clip.values.row(f), qd_, qdd_, c_.hulls.gravity, external_, ws_,
                              tau_);
     double value = w_ * (tau_ - c_.targets[static_cast<std::size_t>(f)]).squaredNorm();
     if (hull.status == retime::HullStatus::Flight && !roots_.empty()) {
@@ -567,7 +567,7 @@ class NaiveObjective final : public retime::PathObjective {
   mutable retime::DynamicsWorkspace ws_;
   mutable Eigen::RowVectorXd qd_, qdd_;
   mutable Eigen::VectorXd tau_, lambda_;
-  mutable std::vector<retime::ExternalForce> external_;
+  mutable std::vector<body::ExternalForce> external_;
 };
 
 // Seconds per source frame of evaluating `objective` at the case's grid samples (all of them
@@ -950,7 +950,7 @@ int main(int argc, char** argv) {
                     retime::DynamicsWorkspace ws;
                     Eigen::VectorXd tau(c.clip.skeleton->channel_count());
                     return seconds_per_frame(c.clip.frame_count(), [&](int f) {
-                      retime::inverse_dynamics(c.body, c.clip.values.row(f), c.d.first.row(f),
+                      body::inverse_dynamics(c.body, c.clip.values.row(f), c.d.first.row(f),
                                                c.d.second.row(f), g, {}, ws, tau);
                       g_sink = tau[0];
                     });
@@ -1144,7 +1144,7 @@ int main(int argc, char** argv) {
       KDL::JntArray ktau(static_cast<unsigned>(order.size()));
       double worst = 0;
       for (int f = 0; f < c->clip.frame_count(); ++f) {
-        retime::inverse_dynamics(c->body, c->clip.values.row(f), c->d.first.row(f), c->d.second.row(f), g, {},
+        body::inverse_dynamics(c->body, c->clip.values.row(f), c->d.first.row(f), c->d.second.row(f), g, {},
                                  ws, tau);
         c->kdl(f, ktau);
         double diff = 0, scale = 0;

@@ -1,4 +1,5 @@
 #include "kg/base/yaml_reader.hpp"
+#include "kg/base/text.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -9,14 +10,6 @@
 namespace kg {
 
 namespace {
-
-std::string in_quotes(const std::string& s) { return "'" + s + "'"; }
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 std::string shown(double v) {
   std::ostringstream s;
@@ -59,7 +52,7 @@ std::vector<YamlReader::Entry> YamlReader::entries(const YAML::Node& map, const 
     Entry e{it->first.Scalar(), it->first, it->second};
     for (const Entry& prior : out)
       if (prior.key == e.key)
-        fail("duplicate key " + in_quotes(e.key) + " in " + what + " (first at " + at(prior.key_node).to_string() +
+        fail("duplicate key " + text::in_quotes(e.key) + " in " + what + " (first at " + at(prior.key_node).to_string() +
                  ")",
              e.key_node);
     out.push_back(std::move(e));
@@ -72,8 +65,8 @@ void YamlReader::check_keys(const std::vector<Entry>& es, const std::string& wha
   for (const Entry& e : es) {
     if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
     const std::string near = nearest_name(e.key, allowed);
-    fail("unknown key " + in_quotes(e.key) + " in " + what +
-             (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; allowed: " + join(allowed),
+    fail("unknown key " + text::in_quotes(e.key) + " in " + what +
+             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; allowed: " + text::join(allowed),
          e.key_node);
   }
 }
@@ -84,8 +77,8 @@ void YamlReader::check_keys(const YAML::Node& map, const std::string& path,
     const std::string key = it->first.Scalar();
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
     const std::string near = nearest_name(key, allowed);
-    fail("unknown key " + in_quotes(path.empty() ? key : path + "." + key) +
-             (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; allowed: " + join(allowed),
+    fail("unknown key " + text::in_quotes(path.empty() ? key : path + "." + key) +
+             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; allowed: " + text::join(allowed),
          it->first.Mark());
   }
 }
@@ -100,7 +93,7 @@ void YamlReader::check_version(const std::vector<Entry>& top) const {
   const Entry* version = find(top, "version");
   if (version == nullptr) throw Error("missing 'version: 1'", {path_, 1, 1});
   if (!version->value.IsScalar() || version->value.Scalar() != "1")
-    fail("unsupported version " + in_quotes(version->value.IsScalar() ? version->value.Scalar() : "?") +
+    fail("unsupported version " + text::in_quotes(version->value.IsScalar() ? version->value.Scalar() : "?") +
              " (expected 1)",
          version->value);
 }
@@ -114,14 +107,14 @@ double YamlReader::number(const YAML::Node& n, const std::string& what, bool all
   const bool plus = t == ".inf" || t == "+.inf" || t == "inf" || t == "+inf";
   const bool minus = t == "-.inf" || t == "-inf";
   if ((plus || minus) && !allow_infinite)
-    fail(what + ": infinity is not allowed here (expected a finite number), got " + in_quotes(text), n);
+    fail(what + ": infinity is not allowed here (expected a finite number), got " + text::in_quotes(text), n);
   if (plus) return std::numeric_limits<double>::infinity();
   if (minus) return -std::numeric_limits<double>::infinity();
   double v = 0;
   std::istringstream in(text);
   in >> v;
-  if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + in_quotes(text), n);
-  if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + in_quotes(text), n);
+  if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + text::in_quotes(text), n);
+  if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + text::in_quotes(text), n);
   return v;
 }
 
@@ -142,7 +135,7 @@ int YamlReader::integer(const YAML::Node& n, const std::string& what) const {
   try {
     return n.as<int>();
   } catch (const YAML::Exception&) {
-    fail(what + ": expected an integer, got " + in_quotes(n.Scalar()), n);
+    fail(what + ": expected an integer, got " + text::in_quotes(n.Scalar()), n);
   }
 }
 

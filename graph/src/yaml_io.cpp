@@ -29,19 +29,6 @@ const std::vector<std::string> kVariableKeys = {"doc", "default", "required"};
 const std::vector<std::string> kNodeKeys = {"type", "params", "doc"};
 const std::vector<std::string> kConnectionKeys = {"from", "to"};
 
-std::string join(const std::vector<std::string>& items, const std::string& sep = ", ") {
-  std::string s;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    if (i) s += sep;
-    s += items[i];
-  }
-  return s;
-}
-
-std::string in_quotes(const std::string& s) {
-  return "'" + s + "'";
-}
-
 std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
   const std::string near = nearest_name(name, candidates);
   return near.empty() ? std::string() : "; did you mean '" + near + "'?";
@@ -115,14 +102,14 @@ class Loader {
   std::vector<Entry> entries(const YAML::Node& map, const std::string& path, const char* what = "key") const {
     std::vector<Entry> out;
     if (map.IsNull()) return out;
-    if (!map.IsMap()) fail(in_quotes(path) + " must be a map, got " + kind_of(map), at(map));
+    if (!map.IsMap()) fail(text::in_quotes(path) + " must be a map, got " + kind_of(map), at(map));
     for (auto it = map.begin(); it != map.end(); ++it) {
-      if (!it->first.IsScalar()) fail("a key of " + in_quotes(path) + " must be a plain name", at(it->first));
+      if (!it->first.IsScalar()) fail("a key of " + text::in_quotes(path) + " must be a plain name", at(it->first));
       Entry e{it->first.Scalar(), it->first, it->second};
       for (const Entry& prior : out)
         if (prior.key == e.key) {
           const std::string name = std::string(what) == "key" ? path + "." + e.key : e.key;
-          fail(std::string("duplicate ") + what + " " + in_quotes(name) + " (first at " +
+          fail(std::string("duplicate ") + what + " " + text::in_quotes(name) + " (first at " +
                    at(prior.key_node).to_string() + ")",
                at(e.key_node));
         }
@@ -136,8 +123,8 @@ class Loader {
     for (const Entry& e : es) {
       if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
       const std::string dotted = path.empty() ? e.key : path + "." + e.key;
-      fail("unknown key " + in_quotes(dotted) + did_you_mean(e.key, allowed) +
-               " (allowed here: " + join(allowed) + ")",
+      fail("unknown key " + text::in_quotes(dotted) + did_you_mean(e.key, allowed) +
+               " (allowed here: " + text::join(allowed) + ")",
            at(e.key_node));
     }
   }
@@ -187,8 +174,8 @@ class Variables {
     for (const auto& [name, value] : overrides) {
       if (find(name)) continue;
       std::string message = "--set " + name + "=" + value + ": the graph declares no variable " +
-                            in_quotes(name) + did_you_mean(name, names());
-      message += declared_.empty() ? " (it declares none)" : " (declared: " + join(names()) + ")";
+                            text::in_quotes(name) + did_you_mean(name, names());
+      message += declared_.empty() ? " (it declares none)" : " (declared: " + text::join(names()) + ")";
       loader_.fail(message, {loader_.file(), 0, 0});
     }
     overrides_ = &overrides;
@@ -210,9 +197,9 @@ class Variables {
   using Lookup = std::function<std::string(const std::string&, const SourceLocation&)>;
 
   [[noreturn]] void undefined(const std::string& name, const SourceLocation& at) const {
-    std::string message = "undefined variable " + in_quotes(name) + did_you_mean(name, names());
+    std::string message = "undefined variable " + text::in_quotes(name) + did_you_mean(name, names());
     message += declared_.empty() ? " (the graph declares no variables: add it under 'variables:')"
-                                 : " (declared: " + join(names()) + ")";
+                                 : " (declared: " + text::join(names()) + ")";
     loader_.fail(message, at);
   }
 
@@ -237,10 +224,10 @@ class Variables {
       }
       const std::size_t close = text.find('}', i + 2);
       if (close == std::string::npos)
-        loader_.fail("unterminated '${' in " + in_quotes(text) + " (write $$ for a literal dollar)", where);
+        loader_.fail("unterminated '${' in " + text::in_quotes(text) + " (write $$ for a literal dollar)", where);
       const std::string name = text.substr(i + 2, close - i - 2);
       if (!is_identifier(name, false))
-        loader_.fail("bad variable reference '${" + name + "}' in " + in_quotes(text) +
+        loader_.fail("bad variable reference '${" + name + "}' in " + text::in_quotes(text) +
                          ": a name has letters, digits and '_' (write $$ for a literal dollar)",
                      where);
       out += lookup(name, where);
@@ -255,13 +242,13 @@ class Variables {
     if (!v) undefined(name, used_at);
     if (auto it = overrides_->find(name); it != overrides_->end()) return values_[name] = it->second;
     if (v->required)
-      loader_.fail("variable " + in_quotes(name) + " is required and has no value: pass --set " + name +
+      loader_.fail("variable " + text::in_quotes(name) + " is required and has no value: pass --set " + name +
                        "=value" + (v->doc.empty() ? std::string() : " (" + v->doc + ")"),
                    v->where);
     if (std::find(resolving_.begin(), resolving_.end(), name) != resolving_.end()) {
       std::vector<std::string> chain(std::find(resolving_.begin(), resolving_.end(), name), resolving_.end());
       chain.push_back(name);
-      loader_.fail("variable defaults refer to each other in a cycle: " + join(chain, " -> "), v->where);
+      loader_.fail("variable defaults refer to each other in a cycle: " + text::join(chain, " -> "), v->where);
     }
     resolving_.push_back(name);
     std::string value =
@@ -311,7 +298,7 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
       version->value.IsScalar() ? version->value.Scalar() : std::string(kind_of(version->value));
   const auto v = text::parse_int(vtext);
   if (!version->value.IsScalar() || !v || *v != kGraphFormatVersion)
-    L.fail("unsupported graph format version " + in_quotes(vtext) + "; this kinegraph reads version " +
+    L.fail("unsupported graph format version " + text::in_quotes(vtext) + "; this kinegraph reads version " +
                std::to_string(kGraphFormatVersion),
            L.at(*version));
   L.check_keys(h.top, "", kTopKeys);
@@ -322,12 +309,12 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
     for (const Entry& e : L.entries(vs->value, "variables", "variable")) {
       const std::string path = "variables." + e.key;
       if (!is_identifier(e.key, false))
-        L.fail("variable name " + in_quotes(e.key) +
+        L.fail("variable name " + text::in_quotes(e.key) +
                    " must be letters, digits and '_', not starting with a digit",
                L.at(e.key_node));
       if (!e.value.IsMap() && !e.value.IsNull())
         L.fail(
-            in_quotes(path) +
+            text::in_quotes(path) +
                 " must be a map like {doc: \"...\", default: value} or {doc: \"...\", required: true}, got " +
                 kind_of(e.value),
             L.at(e));
@@ -336,24 +323,24 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
       Variable var;
       var.name = e.key;
       var.where = L.at(e.key_node);
-      if (const Entry* d = Loader::find(fields, "doc")) var.doc = L.scalar(*d, in_quotes(path + ".doc"));
+      if (const Entry* d = Loader::find(fields, "doc")) var.doc = L.scalar(*d, text::in_quotes(path + ".doc"));
       if (const Entry* r = Loader::find(fields, "required")) {
-        const std::string t = L.scalar(*r, in_quotes(path + ".required"), false);
+        const std::string t = L.scalar(*r, text::in_quotes(path + ".required"), false);
         const auto b = parse_bool(t);
         if (!b)
-          L.fail(in_quotes(path + ".required") + " must be true or false, got " + in_quotes(t), L.at(*r));
+          L.fail(text::in_quotes(path + ".required") + " must be true or false, got " + text::in_quotes(t), L.at(*r));
         var.required = *b;
       }
       if (const Entry* d = Loader::find(fields, "default")) {
         if (var.required)
-          L.fail("variable " + in_quotes(e.key) + " is required, so it takes no default (drop one of them)",
+          L.fail("variable " + text::in_quotes(e.key) + " is required, so it takes no default (drop one of them)",
                  L.at(d->key_node));
         if (!d->value.IsNull() && !d->value.IsScalar())
-          L.fail(in_quotes(path + ".default") +
+          L.fail(text::in_quotes(path + ".default") +
                      " must be a single value (write a list as a string: \"1, 2, 3\"), got " +
                      kind_of(d->value),
                  L.at(*d));
-        var.default_value = L.scalar(*d, in_quotes(path + ".default"));
+        var.default_value = L.scalar(*d, text::in_quotes(path + ".default"));
       }
       vars.declare(std::move(var));
     }
@@ -374,7 +361,7 @@ Head read_head(const Loader& L, Variables& vars, const std::string& text,
     for (const YAML::Node& item : ps->value) {
       const std::string path = "plugins[" + std::to_string(index++) + "]";
       if (!item.IsScalar())
-        L.fail(in_quotes(path) + " must be a plugin name or path, got " + kind_of(item), L.at(item));
+        L.fail(text::in_quotes(path) + " must be a plugin name or path, got " + kind_of(item), L.at(item));
       std::string entry = vars.substitute(item.Scalar(), L.at(item));
       // An entry that is empty after substitution is an optional plugin left out.
       if (!text::trim(entry).empty()) h.plugins.push_back({std::move(entry), L.at(item)});
@@ -447,7 +434,7 @@ class ParamReader {
       }
       case ParamType::Enum: {
         if (std::find(p.choices.begin(), p.choices.end(), text) == p.choices.end())
-          L_.fail(who + " must be one of " + join(p.choices) + "; got " + shown(text, raw) +
+          L_.fail(who + " must be one of " + text::join(p.choices) + "; got " + shown(text, raw) +
                       did_you_mean(text, p.choices),
                   where);
         return text;
@@ -466,7 +453,7 @@ class ParamReader {
       case ParamType::Float:
         return "a float";
       case ParamType::Enum:
-        return "one of " + join(p.choices);
+        return "one of " + text::join(p.choices);
       case ParamType::FloatList:
         return "a list of numbers";
       case ParamType::InputPath:
@@ -480,7 +467,7 @@ class ParamReader {
  private:
   // The text after substitution, and what it was written as when a variable supplied it.
   static std::string shown(const std::string& text, const std::string& raw) {
-    return text == raw ? in_quotes(text) : in_quotes(text) + " (from " + in_quotes(raw) + ")";
+    return text == raw ? text::in_quotes(text) : text::in_quotes(text) + " (from " + text::in_quotes(raw) + ")";
   }
 
   // "0,-9.81,0", "[0, -9.81, 0]", "0 -9.81 0" or one number, typically from a variable.
@@ -513,7 +500,7 @@ class ParamReader {
     for (std::size_t i = 0; i < items.size(); ++i) {
       const auto x = text::parse_double(items[i]);
       if (!x)
-        L_.fail(who + " expects a list of numbers; element " + std::to_string(i) + " " + in_quotes(items[i]) +
+        L_.fail(who + " expects a list of numbers; element " + std::to_string(i) + " " + text::in_quotes(items[i]) +
                     " of " + shown(text, raw) + " is not a number",
                 where);
       list.push_back(*x);
@@ -549,7 +536,7 @@ class ParamReader {
 std::string port_list(const std::vector<PortSpec>& ports) {
   std::vector<std::string> names;
   for (const PortSpec& p : ports) names.push_back(p.name + " (" + p.type + ")");
-  return names.empty() ? std::string("none") : join(names);
+  return names.empty() ? std::string("none") : text::join(names);
 }
 
 std::vector<std::string> port_names(const std::vector<PortSpec>& ports) {
@@ -596,12 +583,12 @@ void check_paths(const Loader& L, const Graph& g, const Registry& registry, cons
   for (std::size_t o = 0; o < outputs.size(); ++o) {
     for (const PathUse& in : inputs)
       if (outputs[o].canonical == in.canonical)
-        L.fail(name(outputs[o]) + " would overwrite input " + in_quotes(in.text) + " (read by " + name(in) +
-                   " at " + place(in).to_string() + "): " + in_quotes(outputs[o].text) + " is the same file",
+        L.fail(name(outputs[o]) + " would overwrite input " + text::in_quotes(in.text) + " (read by " + name(in) +
+                   " at " + place(in).to_string() + "): " + text::in_quotes(outputs[o].text) + " is the same file",
                place(outputs[o]));
     for (std::size_t p = 0; p < o; ++p)
       if (outputs[o].canonical == outputs[p].canonical)
-        L.fail(name(outputs[o]) + " writes " + in_quotes(outputs[o].text) + ", which " + name(outputs[p]) +
+        L.fail(name(outputs[o]) + " writes " + text::in_quotes(outputs[o].text) + ", which " + name(outputs[p]) +
                    " (" + place(outputs[p]).to_string() + ") writes too",
                place(outputs[o]));
   }
@@ -660,22 +647,22 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     const std::string path = "nodes." + e.key;
     const SourceLocation where = L.at(e.key_node);
     if (!is_identifier(e.key, true))
-      L.fail("node id " + in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);
+      L.fail("node id " + text::in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);
     if (!e.value.IsMap())
       L.fail(
-          in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " + kind_of(e.value),
+          text::in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " + kind_of(e.value),
           L.at(e));
     const auto fields = L.entries(e.value, path);
     L.check_keys(fields, path, kNodeKeys);
-    if (const Entry* doc = Loader::find(fields, "doc")) L.scalar(*doc, in_quotes(path + ".doc"));
+    if (const Entry* doc = Loader::find(fields, "doc")) L.scalar(*doc, text::in_quotes(path + ".doc"));
     const Entry* type_entry = Loader::find(fields, "type");
-    if (!type_entry) L.fail("node " + in_quotes(e.key) + " has no 'type'", where);
-    const std::string type = L.scalar(*type_entry, in_quotes(path + ".type"));
-    if (type.empty()) L.fail("node " + in_quotes(e.key) + " has an empty 'type'", L.at(*type_entry));
+    if (!type_entry) L.fail("node " + text::in_quotes(e.key) + " has no 'type'", where);
+    const std::string type = L.scalar(*type_entry, text::in_quotes(path + ".type"));
+    if (type.empty()) L.fail("node " + text::in_quotes(e.key) + " has an empty 'type'", L.at(*type_entry));
     const NodeType* node_type = registry.find_node(type);
     if (!node_type) {
       const auto names = registry.node_type_names();
-      std::string message = "unknown node type " + in_quotes(type) + " for node " + in_quotes(e.key);
+      std::string message = "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
       const std::string near = nearest_name(type, names);
       if (!near.empty())
         message += "; did you mean '" + near + "'?";
@@ -699,9 +686,9 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
         if (!p) {
           std::vector<std::string> names;
           for (const ParamSpec& q : spec.params) names.push_back(q.name);
-          L.fail("unknown param " + in_quotes(pe.key) + " for node " + in_quotes(node.id) + " (" + type +
+          L.fail("unknown param " + text::in_quotes(pe.key) + " for node " + text::in_quotes(node.id) + " (" + type +
                      ")" + did_you_mean(pe.key, names) +
-                     (names.empty() ? " (it takes no params)" : " (params: " + join(names) + ")"),
+                     (names.empty() ? " (it takes no params)" : " (params: " + text::join(names) + ")"),
                  L.at(pe.key_node));
         }
         node.params.set(p->name, reader.read(*p, pe));
@@ -711,7 +698,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     for (const ParamSpec& p : spec.params) {
       if (node.params.has(p.name)) continue;
       if (p.required)
-        L.fail("node " + in_quotes(node.id) + " (" + type + ") needs param " + in_quotes(p.name) + " (" +
+        L.fail("node " + text::in_quotes(node.id) + " (" + type + ") needs param " + text::in_quotes(p.name) + " (" +
                    to_string(p.type) + (p.doc.empty() ? std::string() : ": " + p.doc) + ")",
                where);
       node.params.set(p.name, p.default_value);
@@ -736,7 +723,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
       const std::string path = "connections[" + std::to_string(k++) + "]";
       const SourceLocation where = L.at(item);
       if (!item.IsMap())
-        L.fail(in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
+        L.fail(text::in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
                where);
       const auto fields = L.entries(item, path);
       L.check_keys(fields, path, kConnectionKeys);
@@ -744,17 +731,17 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
       c.where = where;
       for (const char* end : {"from", "to"}) {
         const Entry* f = Loader::find(fields, end);
-        if (!f) L.fail(in_quotes(path) + " has no '" + end + "'", where);
-        const std::string text = L.scalar(*f, in_quotes(path + "." + end), false);
+        if (!f) L.fail(text::in_quotes(path) + " has no '" + end + "'", where);
+        const std::string text = L.scalar(*f, text::in_quotes(path + "." + end), false);
         const SourceLocation at = L.at(*f);
         const std::size_t dot = text.find('.');
         if (dot == std::string::npos || dot == 0 || dot + 1 == text.size())
-          L.fail(in_quotes(path + "." + end) + " must be 'node.port', got " + in_quotes(text), at);
+          L.fail(text::in_quotes(path + "." + end) + " must be 'node.port', got " + text::in_quotes(text), at);
         PortRef ref{text.substr(0, dot), text.substr(dot + 1)};
         auto found = index.find(ref.node);
         if (found == index.end())
-          L.fail("unknown node " + in_quotes(ref.node) + " in " + path + "." + end +
-                     did_you_mean(ref.node, ids) + " (nodes: " + join(ids) + ")",
+          L.fail("unknown node " + text::in_quotes(ref.node) + " in " + path + "." + end +
+                     did_you_mean(ref.node, ids) + " (nodes: " + text::join(ids) + ")",
                  at);
         const NodeSpec& spec = spec_of(found->second);
         const bool is_from = std::string(end) == "from";
@@ -764,11 +751,11 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
           if (std::any_of(others.begin(), others.end(),
                           [&](const PortSpec& p) { return p.name == ref.port; }))
             L.fail(ref.to_string() + " is an " + (is_from ? "input" : "output") + " of node " +
-                       in_quotes(ref.node) + " (" + spec.type +
+                       text::in_quotes(ref.node) + " (" + spec.type +
                        "); a connection goes from an output to an input",
                    at);
-          L.fail("node " + in_quotes(ref.node) + " (" + spec.type + ") has no " +
-                     (is_from ? "output " : "input ") + in_quotes(ref.port) +
+          L.fail("node " + text::in_quotes(ref.node) + " (" + spec.type + ") has no " +
+                     (is_from ? "output " : "input ") + text::in_quotes(ref.port) +
                      did_you_mean(ref.port, port_names(ports)) + " (" + (is_from ? "outputs: " : "inputs: ") +
                      port_list(ports) + ")",
                  at);
@@ -804,9 +791,9 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
         for (const PortSpec& out : spec_of(j).outputs)
           if (j != i && out.type == in.type) candidates.push_back(g.nodes[j].id + "." + out.name);
       L.fail("required input " + g.nodes[i].id + "." + in.name + " (" + in.type + ") of node " +
-                 in_quotes(g.nodes[i].id) + " (" + g.nodes[i].type + ") is not connected" +
+                 text::in_quotes(g.nodes[i].id) + " (" + g.nodes[i].type + ") is not connected" +
                  (candidates.empty() ? std::string(" (no node of the graph outputs " + in.type + ")")
-                                     : " (outputs of that type: " + join(candidates) + ")"),
+                                     : " (outputs of that type: " + text::join(candidates) + ")"),
              g.nodes[i].where);
     }
   }
@@ -819,7 +806,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     SourceLocation where = g.nodes[cycle.front()].where;
     for (const Connection& c : g.connections)
       if (c.from.node == names[names.size() - 2] && c.to.node == names.back()) where = c.where;
-    L.fail("the graph has a cycle: " + join(names, " -> "), where);
+    L.fail("the graph has a cycle: " + text::join(names, " -> "), where);
   }
 
   check_paths(L, g, registry, places);
@@ -829,7 +816,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     try {
       n.node = registry.create_node(n.type, n.params);
     } catch (const std::exception& e) {
-      L.fail("node " + in_quotes(n.id) + " (" + n.type + "): " + e.what(), n.where);
+      L.fail("node " + text::in_quotes(n.id) + " (" + n.type + "): " + e.what(), n.where);
     }
   }
   return g;

@@ -1,13 +1,13 @@
 // The body model of a skeleton: classes, bones, masses, inertias, overrides and torque limits
 // (the rules are in body_build.hpp).
 #include "kg/body/body_build.hpp"
+#include "kg/base/text.hpp"
 
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <numbers>
 #include <regex>
-#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -19,28 +19,11 @@ namespace {
 using kg::Error;
 using motion::Skeleton;
 
-std::string fmt(double v, int precision = 4) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
-
-std::string join(const std::vector<std::string>& names, const std::string& sep = ", ") {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : sep) + n;
-  return out;
-}
-
-std::string in_quotes(const std::string& s) {
-  return "'" + s + "'";
-}
-
 std::regex compile(const std::string& pattern, const kg::SourceLocation& where, const std::string& what) {
   try {
     return std::regex(pattern, std::regex::ECMAScript);
   } catch (const std::regex_error& e) {
-    throw Error("bad regular expression " + in_quotes(pattern) + " in " + what + ": " + e.what(), where);
+    throw Error("bad regular expression " + text::in_quotes(pattern) + " in " + what + ": " + e.what(), where);
   }
 }
 
@@ -73,13 +56,13 @@ void require_matches(const Skeleton& skeleton, const std::vector<Pattern>& patte
   for (std::size_t p = 0; p < patterns.size(); ++p)
     if (m.matched[p].empty())
       throw Error(
-          what + " pattern " + in_quotes(patterns[p].pattern) +
+          what + " pattern " + text::in_quotes(patterns[p].pattern) +
               " matches no joint of the skeleton (the whole name must match; joints: " +
               [&] {
                 std::vector<std::string> names;
                 for (int j = 0; j < skeleton.joint_count() && j < 12; ++j)
                   names.push_back(skeleton.joint(j).name);
-                return join(names) + (skeleton.joint_count() > 12 ? ", ..." : "");
+                return text::join(names) + (skeleton.joint_count() > 12 ? ", ..." : "");
               }() +
               ")",
           patterns[p].where);
@@ -127,13 +110,13 @@ void check_segment_inertia(const Eigen::Matrix3d& I, const std::string& what) {
   const Eigen::Vector3d ev =
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I, Eigen::EigenvaluesOnly).eigenvalues();
   if (!(ev.minCoeff() > 0))
-    throw std::invalid_argument(what + ": inertia is not positive definite (principal moments " + fmt(ev[0]) +
-                                ", " + fmt(ev[1]) + ", " + fmt(ev[2]) + " kg m²)");
+    throw std::invalid_argument(what + ": inertia is not positive definite (principal moments " + text::significant(ev[0], 4) +
+                                ", " + text::significant(ev[1], 4) + ", " + text::significant(ev[2], 4) + " kg m²)");
   // A rigid body's principal moments obey the triangle inequality (each is a sum of two second
   // moments of its mass distribution).
   if (ev[2] > (ev[0] + ev[1]) * (1 + 1e-9))
-    throw std::invalid_argument(what + ": no rigid body has these principal moments (" + fmt(ev[0]) + ", " +
-                                fmt(ev[1]) + ", " + fmt(ev[2]) +
+    throw std::invalid_argument(what + ": no rigid body has these principal moments (" + text::significant(ev[0], 4) + ", " +
+                                text::significant(ev[1], 4) + ", " + text::significant(ev[2], 4) +
                                 " kg m²: the largest exceeds the sum of the others)");
 }
 
@@ -142,25 +125,25 @@ namespace {
 void check_spec(const BodySpec& spec) {
   const std::string table = to_string(spec.table);
   if (!std::isfinite(spec.mass) || spec.mass < 0)
-    throw std::invalid_argument("body mass " + fmt(spec.mass) + ": expected a finite number of kg");
+    throw std::invalid_argument("body mass " + text::significant(spec.mass, 4) + ": expected a finite number of kg");
   if (spec.table != BodyTable::Cylinders && !(spec.mass > 0))
-    throw std::invalid_argument("body mass " + fmt(spec.mass) + " kg with table " + table +
+    throw std::invalid_argument("body mass " + text::significant(spec.mass, 4) + " kg with table " + table +
                                 ": expected > 0 (0 means 'from the volumes' only with cylinders)");
   for (int c = 0; c < kSegmentClassCount; ++c) {
     const double r = spec.radii[static_cast<std::size_t>(c)];
     if (!std::isfinite(r) || !(r > 0))
       throw std::invalid_argument(std::string("cylinder radius of ") +
-                                  to_string(static_cast<SegmentClass>(c)) + " " + fmt(r) +
+                                  to_string(static_cast<SegmentClass>(c)) + " " + text::significant(r, 4) +
                                   ": expected metres > 0");
   }
   if (!std::isfinite(spec.friction) || spec.friction < 0)
-    throw std::invalid_argument("friction " + fmt(spec.friction) + ": expected a finite number >= 0");
+    throw std::invalid_argument("friction " + text::significant(spec.friction, 4) + ": expected a finite number >= 0");
   if (!spec.gravity.allFinite()) throw std::invalid_argument("gravity: expected a finite vector (m/s²)");
   for (const SegmentOverride& o : spec.segments) {
-    const std::string what = "segments " + in_quotes(o.pattern);
+    const std::string what = "segments " + text::in_quotes(o.pattern);
     auto positive = [&](const std::optional<double>& v, const char* name) {
       if (v && (!std::isfinite(*v) || !(*v > 0)))
-        throw Error(what + "." + name + " " + fmt(*v) + ": expected a finite number > 0", o.where);
+        throw Error(what + "." + name + " " + text::significant(*v, 4) + ": expected a finite number > 0", o.where);
     };
     positive(o.mass, "mass");
     positive(o.mass_scale, "mass_scale");
@@ -176,10 +159,10 @@ void check_spec(const BodySpec& spec) {
     }
   }
   for (const TorqueLimit& t : spec.torque_limits) {
-    if (t.values.empty()) throw Error("torque_limits " + in_quotes(t.pattern) + ": no value", t.where);
+    if (t.values.empty()) throw Error("torque_limits " + text::in_quotes(t.pattern) + ": no value", t.where);
     for (double v : t.values)
       if (std::isnan(v) || !(v > 0))
-        throw Error("torque_limits " + in_quotes(t.pattern) + ": " + fmt(v) +
+        throw Error("torque_limits " + text::in_quotes(t.pattern) + ": " + text::significant(v, 4) +
                         " is no bound (expected N m > 0, or .inf for unlimited)",
                     t.where);
   }
@@ -336,8 +319,8 @@ ClassNames match_classes(const Skeleton& s, const BodySpec& spec, BuiltBody& out
     for (int j : user.matched[p])
       if (user.owner[J(j)] == static_cast<int>(p)) matched.push_back(s.joint(j).name);
     out.notes.push_back(
-        "classes " + in_quotes(spec.classes[p].pattern) + " -> " + to_string(spec.classes[p].segment_class) +
-        ": " + (matched.empty() ? std::string("no joint left (earlier patterns took them)") : join(matched)));
+        "classes " + text::in_quotes(spec.classes[p].pattern) + " -> " + to_string(spec.classes[p].segment_class) +
+        ": " + (matched.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(matched)));
   }
   return names;
 }
@@ -393,7 +376,7 @@ void require_table_segments(const Skeleton& s, const Groups& groups, const Class
       if (groups.segment_class[g] != sc) continue;
       std::vector<std::string> joint_names;
       for (int j : groups.joints[g]) joint_names.push_back(s.joint(j).name);
-      runs.push_back(join(joint_names, "+"));
+      runs.push_back(text::join(joint_names, "+"));
       zero = zero || !(groups.length[g] > kZeroLength);
     }
     const std::size_t want = is_paired(sc) ? 2 : 1;
@@ -403,23 +386,23 @@ void require_table_segments(const Skeleton& s, const Groups& groups, const Class
                         (is_paired(sc) ? "; expected a left and a right)" : ")"));
     else if (runs.size() != want)
       missing.push_back(name + " (" + std::to_string(runs.size()) +
-                        " separate runs of joints: " + join(runs, ", ") + "; expected a left and a right)");
+                        " separate runs of joints: " + text::join(runs, ", ") + "; expected a left and a right)");
     else if (zero)
-      missing.push_back(name + " (" + join(runs, ", ") +
+      missing.push_back(name + " (" + text::join(runs, ", ") +
                         ": no bone, every joint's children and End Sites are at its origin)");
   }
   if (missing.empty()) return;
   std::vector<std::string> candidates = names.unmatched;
   candidates.insert(candidates.end(), names.massless.begin(), names.massless.end());
-  throw std::invalid_argument("the skeleton lacks table segments: " + join(missing, "; ") +
+  throw std::invalid_argument("the skeleton lacks table segments: " + text::join(missing, "; ") +
                               ". Map its joints to classes in a body file (`file`), joint-name regex (the "
                               "whole name) to class, e.g.\n"
                               "  version: 1\n"
                               "  classes:\n"
                               "    \"LeftUpLeg|RightUpLeg\": thigh\n"
                               "classes: " +
-                              join(segment_class_names()) + ". Joints without a class: " +
-                              (candidates.empty() ? std::string("none") : join(candidates)));
+                              text::join(segment_class_names()) + ". Joints without a class: " +
+                              (candidates.empty() ? std::string("none") : text::join(candidates)));
 }
 
 // Anatomical directions in the reference pose, and every joint's world frame in it.
@@ -543,26 +526,26 @@ void rescale_to_body_mass(const BodySpec& spec, const std::vector<std::string>& 
                                        : std::string(to_string(spec.table)) + ": " + table->citation;
   if (!(sum > 0)) throw std::invalid_argument("build_body_model: the body has no mass");
   if (cylinders && spec.mass == 0) {
-    out.notes.push_back("body: " + source + ", " + fmt(sum) + " kg from the volumes");
+    out.notes.push_back("body: " + source + ", " + text::significant(sum, 4) + " kg from the volumes");
   } else {
     const double k = spec.mass / sum;
     for (SegmentInertia& seg : body.segments) {
       seg.mass *= k;
       seg.inertia *= k;
     }
-    out.notes.push_back("body: " + source + ", " + fmt(spec.mass) + " kg" +
-                        (cylinders ? " (volumes " + fmt(sum) + " kg, rescaled by " + fmt(k) + ")"
+    out.notes.push_back("body: " + source + ", " + text::significant(spec.mass, 4) + " kg" +
+                        (cylinders ? " (volumes " + text::significant(sum, 4) + " kg, rescaled by " + text::significant(k, 4) + ")"
                                    : (std::abs(k - 1) > 1e-12 ? " (the table's fractions sum to " +
-                                                                    fmt(100 * table->mass_sum(), 6) +
-                                                                    "%: rescaled by " + fmt(k, 6) + ")"
+                                                                    text::significant(100 * table->mass_sum(), 6) +
+                                                                    "%: rescaled by " + text::significant(k, 6) + ")"
                                                               : std::string())));
   }
   if (!zero_length.empty())
     out.notes.push_back("no bone, so no mass (children and End Sites at the joint's origin): " +
-                        join(zero_length));
-  if (!names.massless.empty()) out.notes.push_back("massless by class: " + join(names.massless));
+                        text::join(zero_length));
+  if (!names.massless.empty()) out.notes.push_back("massless by class: " + text::join(names.massless));
   if (!names.unmatched.empty())
-    out.notes.push_back("massless, no class pattern matched: " + join(names.unmatched));
+    out.notes.push_back("massless, no class pattern matched: " + text::join(names.unmatched));
 }
 
 // One override on a joint with a class (`what` names both in messages).
@@ -605,7 +588,7 @@ void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
       if (om.owner[J(j)] != static_cast<int>(p)) continue;
       const std::string& name = s.joint(j).name;
       SegmentInertia& seg = out.body.segments[J(j)];
-      const std::string what = "segments " + in_quotes(o.pattern) + ": joint " + in_quotes(name);
+      const std::string what = "segments " + text::in_quotes(o.pattern) + ": joint " + text::in_quotes(name);
       if (out.classes[J(j)] == SegmentClass::Massless) {
         if (o.mass || o.radius || o.inertia)
           throw Error(
@@ -615,11 +598,11 @@ void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
       }
       const double before = seg.mass;
       override_segment(o, what, out.bones[J(j)], seg);
-      done.push_back(name + " " + fmt(before) + " -> " + fmt(seg.mass) + " kg");
+      done.push_back(name + " " + text::significant(before, 4) + " -> " + text::significant(seg.mass, 4) + " kg");
     }
     out.notes.push_back(
-        "segments " + in_quotes(o.pattern) + ": " +
-        (done.empty() ? std::string("no joint left (earlier patterns took them)") : join(done)));
+        "segments " + text::in_quotes(o.pattern) + ": " +
+        (done.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(done)));
   }
 }
 
@@ -653,15 +636,15 @@ std::vector<bool> unactuate_floating_base(const Skeleton& s, BuiltBody& out) {
     body.torque_max.segment(jt.first_channel, count).setZero();
     if (count > 0) base.push_back(jt.name);
   }
-  if (!base.empty()) out.notes.push_back("unactuated (floating base): " + join(base));
+  if (!base.empty()) out.notes.push_back("unactuated (floating base): " + text::join(base));
   return floating;
 }
 
 // Bounds joint jt's channels by the limit t: one value for every rotation channel, or one per channel.
 void limit_joint(const TorqueLimit& t, const motion::Joint& jt, BodyModel& body) {
   if (t.values.size() != 1 && t.values.size() != jt.channels.size())
-    throw Error("torque_limits " + in_quotes(t.pattern) + ": " + std::to_string(t.values.size()) +
-                    " values for joint " + in_quotes(jt.name) + ", which has " +
+    throw Error("torque_limits " + text::in_quotes(t.pattern) + ": " + std::to_string(t.values.size()) +
+                    " values for joint " + text::in_quotes(jt.name) + ", which has " +
                     std::to_string(jt.channels.size()) + " channels (give one value, or one per channel)",
                 t.where);
   for (std::size_t c = 0; c < jt.channels.size(); ++c) {
@@ -692,13 +675,13 @@ void apply_torque_limits(const Skeleton& s, const BodySpec& spec, const std::vec
       done.push_back(jt.name);
     }
     if (done.empty() && !skipped.empty())
-      throw Error("torque_limits " + in_quotes(t.pattern) + " matches only the floating base (" +
-                      join(skipped) + "), whose channels are unactuated: their bounds are always 0",
+      throw Error("torque_limits " + text::in_quotes(t.pattern) + " matches only the floating base (" +
+                      text::join(skipped) + "), whose channels are unactuated: their bounds are always 0",
                   t.where);
     out.notes.push_back(
-        "torque_limits " + in_quotes(t.pattern) + " = " +
-        (t.values.size() == 1 ? fmt(t.values[0]) + " N m" : std::to_string(t.values.size()) + " values") +
-        ": " + (done.empty() ? std::string("no joint left (earlier patterns took them)") : join(done)));
+        "torque_limits " + text::in_quotes(t.pattern) + " = " +
+        (t.values.size() == 1 ? text::significant(t.values[0], 4) + " N m" : std::to_string(t.values.size()) + " values") +
+        ": " + (done.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(done)));
   }
 }
 
@@ -759,9 +742,9 @@ void check_body_model(const BodyModel& body, const std::string& who) {
                                 std::to_string(channels) + " channels");
   for (std::size_t j = 0; j < n; ++j) {
     const SegmentInertia& seg = body.segments[j];
-    const std::string what = who + ": joint " + in_quotes(s.joint(static_cast<int>(j)).name);
+    const std::string what = who + ": joint " + text::in_quotes(s.joint(static_cast<int>(j)).name);
     if (!std::isfinite(seg.mass) || seg.mass < 0)
-      throw std::invalid_argument(what + ": mass " + fmt(seg.mass));
+      throw std::invalid_argument(what + ": mass " + text::significant(seg.mass, 4));
     if (!seg.com.allFinite()) throw std::invalid_argument(what + ": centre of mass is not finite");
     if (seg.mass > 0)
       check_segment_inertia(seg.inertia, what);
@@ -772,9 +755,9 @@ void check_body_model(const BodyModel& body, const std::string& who) {
     if (std::isnan(body.torque_min[c]) || std::isnan(body.torque_max[c]) ||
         body.torque_min[c] > body.torque_max[c])
       throw std::invalid_argument(who + ": channel " + s.channel_name(static_cast<int>(c)) + " bounds [" +
-                                  fmt(body.torque_min[c]) + ", " + fmt(body.torque_max[c]) + "]");
+                                  text::significant(body.torque_min[c], 4) + ", " + text::significant(body.torque_max[c], 4) + "]");
   if (!std::isfinite(body.friction) || body.friction < 0)
-    throw std::invalid_argument(who + ": friction " + fmt(body.friction));
+    throw std::invalid_argument(who + ": friction " + text::significant(body.friction, 4));
   if (!body.gravity.allFinite()) throw std::invalid_argument(who + ": gravity is not finite");
 }
 

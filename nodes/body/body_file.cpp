@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <regex>
-#include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
@@ -12,6 +11,7 @@
 #include "kg/base/error.hpp"
 #include "kg/base/yaml_reader.hpp"
 #include "kg/body/body_build.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::body {
 
@@ -19,22 +19,6 @@ namespace {
 
 using kg::Error;
 using kg::SourceLocation;
-
-std::string in_quotes(const std::string& s) {
-  return "'" + s + "'";
-}
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
 
 class Reader : public kg::YamlReader {
  public:
@@ -57,7 +41,7 @@ class Reader : public kg::YamlReader {
     try {
       std::regex re(e.key, std::regex::ECMAScript);
     } catch (const std::regex_error& err) {
-      fail("bad regular expression " + in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+      fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
     }
   }
 
@@ -132,13 +116,13 @@ class Reader : public kg::YamlReader {
 
  private:
   BodyTable table(const YAML::Node& n) const {
-    if (!n.IsScalar()) fail("table: expected one of " + join(body_table_names()), n);
+    if (!n.IsScalar()) fail("table: expected one of " + text::join(body_table_names()), n);
     const auto t = body_table_from_string(n.Scalar());
     if (!t) {
       const std::string near = kg::nearest_name(n.Scalar(), body_table_names());
-      fail("table: unknown table " + in_quotes(n.Scalar()) +
-               (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
-               join(body_table_names()),
+      fail("table: unknown table " + text::in_quotes(n.Scalar()) +
+               (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; expected one of " +
+               text::join(body_table_names()),
            n);
     }
     return *t;
@@ -152,9 +136,9 @@ class Reader : public kg::YamlReader {
         std::vector<std::string> names = segment_class_names();
         names.pop_back();  // massless has no radius
         const std::string near = kg::nearest_name(r.key, names);
-        fail("unknown class " + in_quotes(r.key) + " in radii" +
-                 (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") +
-                 "; allowed: " + join(names),
+        fail("unknown class " + text::in_quotes(r.key) + " in radii" +
+                 (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") +
+                 "; allowed: " + text::join(names),
              r.key_node);
       }
       radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, "radii." + r.key);
@@ -168,9 +152,9 @@ class Reader : public kg::YamlReader {
       if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
         const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
         const std::string near = kg::nearest_name(got, segment_class_names());
-        fail("classes." + c.key + ": unknown class " + in_quotes(got) +
-                 (near.empty() ? "" : " (did you mean " + in_quotes(near) + "?)") + "; expected one of " +
-                 join(segment_class_names()),
+        fail("classes." + c.key + ": unknown class " + text::in_quotes(got) +
+                 (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; expected one of " +
+                 text::join(segment_class_names()),
              c.value);
       }
       out.push_back({c.key, *segment_class_from_string(c.value.Scalar()), at(c.key_node)});
@@ -213,11 +197,11 @@ class Reader : public kg::YamlReader {
       if (limit.values.empty()) fail(what + ": expected one bound per channel, got an empty list", t.value);
       for (std::size_t i = 0; i < limit.values.size(); ++i)
         if (!(limit.values[i] > 0))
-          fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " + fmt(limit.values[i]),
+          fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " + text::significant(limit.values[i]),
                t.value[i]);
     } else {
       const double v = number(t.value, what, true);
-      if (!(v > 0)) fail(what + ": expected N m > 0 (or .inf), got " + fmt(v), t.value);
+      if (!(v > 0)) fail(what + ": expected N m > 0 (or .inf), got " + text::significant(v), t.value);
       limit.values = {v};
     }
     return limit;
@@ -234,7 +218,7 @@ class Reader : public kg::YamlReader {
     if (!n.IsScalar()) fail("gravity: expected m/s² (straight down) or a vector [x, y, z]", n);
     const double g = number(n, "gravity");
     if (g < 0)
-      fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " + fmt(g),
+      fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " + text::significant(g),
            n);
     return Eigen::Vector3d(0, -g, 0);
   }
@@ -242,7 +226,7 @@ class Reader : public kg::YamlReader {
   // A table needs a mass > 0, located at the file's `mass` when it gave one.
   void check_mass(const BodySpec& spec, const Entry* mass) const {
     if (spec.table == BodyTable::Cylinders || spec.mass > 0) return;
-    const std::string msg = "mass " + fmt(spec.mass) + " kg with table " + to_string(spec.table) +
+    const std::string msg = "mass " + text::significant(spec.mass) + " kg with table " + to_string(spec.table) +
                             ": expected > 0 (0 means 'from the volumes' only with cylinders)";
     if (mass != nullptr) fail(msg, mass->value);
     throw Error(msg, {path(), 1, 1});

@@ -2,12 +2,12 @@
 #include <cmath>
 #include <limits>
 #include <memory>
-#include <sstream>
 
 #include "kg/builtin_nodes.hpp"
 #include "kg/body/nodes.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/body/body_build.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg {
 namespace {
@@ -18,19 +18,12 @@ using graph::Params;
 using graph::ParamType;
 using graph::RunContext;
 
-std::string fmt(double v, int precision = 4) {
-  std::ostringstream s;
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
-
 std::string describe(const std::string& key, const body::BodySpec& s) {
   if (key == "table") return body::to_string(s.table);
-  if (key == "mass") return fmt(s.mass) + " kg";
-  if (key == "friction") return fmt(s.friction);
+  if (key == "mass") return text::significant(s.mass, 4) + " kg";
+  if (key == "friction") return text::significant(s.friction, 4);
   const Eigen::Vector3d& g = s.gravity;
-  return "[" + fmt(g.x()) + ", " + fmt(g.y()) + ", " + fmt(g.z()) + "] m/s²";
+  return "[" + text::significant(g.x(), 4) + ", " + text::significant(g.y(), 4) + ", " + text::significant(g.z(), 4) + "] m/s²";
 }
 
 class BodyModelNode final : public graph::Node {
@@ -44,7 +37,7 @@ class BodyModelNode final : public graph::Node {
     spec_.gravity = Eigen::Vector3d(0, -p.get<double>("gravity"), 0);
     // Without a file the params are the whole spec: refuse a bad one when the graph loads.
     if (path_.empty() && spec_.table != body::BodyTable::Cylinders && !(spec_.mass > 0))
-      throw std::invalid_argument("mass " + fmt(spec_.mass) + " kg with table " +
+      throw std::invalid_argument("mass " + text::significant(spec_.mass, 4) + " kg with table " +
                                   body::to_string(spec_.table) +
                                   ": expected > 0 (0 means 'from the volumes' only with cylinders)");
   }
@@ -68,11 +61,11 @@ class BodyModelNode final : public graph::Node {
     for (const std::string& note : built.notes) ctx.log(note);
 
     const body::BodyModel& body = built.body;
-    std::string summary = "total " + fmt(body.total_mass()) + " kg:";
+    std::string summary = "total " + text::significant(body.total_mass(), 4) + " kg:";
     for (int c = 0; c < body::kSegmentClassCount; ++c) {
       const auto sc = static_cast<body::SegmentClass>(c);
       const double kg = built.class_mass[static_cast<std::size_t>(c)];
-      summary += std::string(c ? "," : "") + " " + body::to_string(sc) + " " + fmt(kg) + " kg";
+      summary += std::string(c ? "," : "") + " " + body::to_string(sc) + " " + text::significant(kg, 4) + " kg";
       ctx.report(std::string("mass_") + body::to_string(sc), kg);
     }
     ctx.log(summary);

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "kg/io/bvh.hpp"
+#include "kg/motion/rotations.hpp"
 
 namespace kg::io {
 namespace {
@@ -59,9 +60,8 @@ std::array<double, 3> euler_angles(const Eigen::Matrix3d& r, int i, int j, int k
 
 // The solution of the same rotation closest to `previous`, each angle unwrapped by 2 pi.
 std::array<double, 3> closest_euler(std::array<double, 3> e, const std::array<double, 3>& previous) {
-  const double two_pi = 2 * std::numbers::pi;
   auto unwrap = [&](std::array<double, 3> v) {
-    for (int n = 0; n < 3; ++n) v[n] += two_pi * std::round((previous[n] - v[n]) / two_pi);
+    for (int n = 0; n < 3; ++n) v[n] = motion::nearest_angle(v[n], previous[n]);
     return v;
   };
   const std::array<double, 3> first = unwrap(e);

@@ -11,12 +11,12 @@
 #include <limits>
 #include <numbers>
 #include <regex>
-#include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
 #include "kg/base/error.hpp"
 #include "kg/base/yaml_reader.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::retarget {
 
@@ -24,12 +24,6 @@ namespace {
 
 using kg::Error;
 using kg::SourceLocation;
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
 
 class Reader : public kg::YamlReader {
  public:
@@ -163,7 +157,7 @@ class Reader : public kg::YamlReader {
         return ch;
       }
     }
-    fail("joint '" + joint_name + "' has no channel '" + channel_name + "' (it has: " + join(has) + ")", n.Mark());
+    fail("joint '" + joint_name + "' has no channel '" + channel_name + "' (it has: " + text::join(has) + ")", n.Mark());
   }
 
   int frame_count(int character) const { return chars_[static_cast<std::size_t>(character)].frame_count(); }

@@ -5,11 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 #include "kg/base/error.hpp"
 #include "kg/motion/kinematics.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::retarget {
 
@@ -422,12 +422,6 @@ std::vector<std::shared_ptr<const ConstraintKind>> builtin_kinds() {
           std::make_shared<Orientation>()};
 }
 
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
 }  // namespace
 
 // ---- table -----------------------------------------------------------------------------------
@@ -463,7 +457,7 @@ std::vector<std::string> ConstraintKindTable::names() const {
 
 namespace {
 [[noreturn]] void throw_unknown_kind(const Constraint& c, const std::vector<std::string>& known) {
-  std::string msg = "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + join(known);
+  std::string msg = "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + text::join(known);
   const std::string near = kg::nearest_name(c.kind, known);
   if (!near.empty()) msg += "; did you mean '" + near + "'?";
   throw std::invalid_argument(msg + ")");

@@ -3,11 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
-#include <numbers>
 #include <regex>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
+#include "kg/motion/filters.hpp"
 #include "kg/motion/skeleton.hpp"
 
 namespace kg::retarget {
@@ -85,13 +86,8 @@ PyramidEnergy pyramid_energy(const motion::Motion& m, const std::vector<int>& ch
     const bool rotation = motion::is_rotation(s.joint(joint).channels[static_cast<std::size_t>(index)].kind);
     for (int f = 0; f < m.frame_count(); ++f) x[f] = m.values(f, c);
     if (rotation) {
-      // Unwrap: a jump of more than half a turn between frames is a wrap, not motion.
-      double shift = 0;
-      for (int f = 1; f < x.size(); ++f) {
-        const double raw = m.values(f, c), prev = m.values(f - 1, c);
-        shift -= 2 * std::numbers::pi * std::round((raw - prev) / (2 * std::numbers::pi));
-        x[f] = raw + shift;
-      }
+      // A jump of more than half a turn between frames is a wrap, not motion.
+      motion::unwrap_angles(std::span<double>(x.data(), static_cast<std::size_t>(x.size())));
     } else {
       x /= height;
     }

@@ -8,10 +8,13 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <span>
 #include <stdexcept>
 #include <tuple>
 
 #include "kg/base/json.hpp"
+#include "kg/motion/filters.hpp"
+#include "kg/motion/rotations.hpp"
 
 namespace kg::retarget {
 namespace {
@@ -19,8 +22,15 @@ namespace {
 using motion::Motion;
 constexpr double kPi = std::numbers::pi;
 
-double wrap_angle(double a) {
-  return std::remainder(a, 2 * kPi);
+// A rotation channel's curve made continuous (motion::unwrap_angles); with `start_near_zero`, moved
+// by whole turns so that it starts within pi of 0.
+Eigen::VectorXd unwrapped(Eigen::VectorXd x, bool start_near_zero = false) {
+  motion::unwrap_angles(std::span<double>(x.data(), static_cast<std::size_t>(x.size())));
+  if (start_near_zero && x.size() > 0) {
+    const double turn = motion::nearest_angle(x(0), 0) - x(0);
+    if (turn != 0) x.array() += turn;
+  }
+  return x;
 }
 
 void check_same_layout(const Motion& a, const Motion& b, const char* what) {
@@ -84,10 +94,11 @@ JerkFigures jerk_of(const Motion& shape, const std::function<Eigen::VectorXd(int
   return out;
 }
 
-// The displacement of channel c: result - reference, rotations wrapped and unwrapped over time.
+// The displacement of channel c: result - reference, rotations unwrapped over time from within pi
+// of 0.
 Eigen::VectorXd displacement(const Motion& result, const Motion& reference, int c) {
   Eigen::VectorXd d = result.values.col(c) - reference.values.col(c);
-  if (channel_is_rotation(*result.skeleton, c)) d = unwrap_angles(d, true);
+  if (channel_is_rotation(*result.skeleton, c)) d = unwrapped(d, true);
   return d;
 }
 
@@ -171,18 +182,10 @@ SkateSummary foot_skate(const ConstraintSet& set, const PoseCache& poses) {
 }
 
 // ---- jerk ----
-Eigen::VectorXd unwrap_angles(const Eigen::Ref<const Eigen::VectorXd>& x, bool wrap_first) {
-  Eigen::VectorXd y(x.size());
-  if (x.size() == 0) return y;
-  y(0) = wrap_first ? wrap_angle(x(0)) : x(0);
-  for (Eigen::Index f = 1; f < x.size(); ++f) y(f) = y(f - 1) + wrap_angle(x(f) - x(f - 1));
-  return y;
-}
-
 JerkFigures rms_jerk(const Motion& motion) {
   motion.check();
   return jerk_of(motion, [&](int c) -> Eigen::VectorXd {
-    if (channel_is_rotation(*motion.skeleton, c)) return unwrap_angles(motion.values.col(c));
+    if (channel_is_rotation(*motion.skeleton, c)) return unwrapped(motion.values.col(c));
     return motion.values.col(c);
   });
 }

@@ -5,7 +5,6 @@
 #include <filesystem>
 #include <fstream>
 #include <regex>
-#include <sstream>
 
 #include <yaml-cpp/yaml.h>
 
@@ -26,22 +25,6 @@ using kg::Error;
 using kg::SourceLocation;
 using motion::Skeleton;
 
-std::string in_quotes(const std::string& s) {
-  return "'" + s + "'";
-}
-
-std::string join(const std::vector<std::string>& names) {
-  std::string out;
-  for (const std::string& n : names) out += (out.empty() ? "" : ", ") + n;
-  return out;
-}
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 class Reader : public kg::YamlReader {
  public:
   Reader(const Skeleton& source, std::string path) : YamlReader(std::move(path)), source_(source) {}
@@ -61,7 +44,7 @@ class Reader : public kg::YamlReader {
       try {
         re = std::regex(e.key, std::regex::ECMAScript);
       } catch (const std::regex_error& err) {
-        fail("bad regular expression " + in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+        fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
       }
       const double v = positive(e.value, what + "." + e.key);
       std::vector<std::string> matched, shadowed;
@@ -75,7 +58,7 @@ class Reader : public kg::YamlReader {
         if (lengths) {
           const double len = source_.joint(j).offset.norm();
           if (!(len > 0))
-            fail(what + "." + e.key + ": joint " + in_quotes(name) +
+            fail(what + "." + e.key + ": joint " + text::in_quotes(name) +
                      " has a zero offset from its parent in the source, so no length can be set for it",
                  e.key_node);
           f[j] = v / len;
@@ -86,11 +69,11 @@ class Reader : public kg::YamlReader {
         matched.push_back(name);
       }
       if (matched.empty() && shadowed.empty())
-        fail("pattern " + in_quotes(e.key) + " in " + what + " matches no joint (the whole name must match)",
+        fail("pattern " + text::in_quotes(e.key) + " in " + what + " matches no joint (the whole name must match)",
              e.key_node);
-      std::string note = what + " " + in_quotes(e.key) + " = " + fmt(v) + ": " +
-                         (matched.empty() ? std::string("no joint left") : join(matched));
-      if (!shadowed.empty()) note += " (already matched earlier: " + join(shadowed) + ")";
+      std::string note = what + " " + text::in_quotes(e.key) + " = " + text::significant(v) + ": " +
+                         (matched.empty() ? std::string("no joint left") : text::join(matched));
+      if (!shadowed.empty()) note += " (already matched earlier: " + text::join(shadowed) + ")";
       notes.push_back(note);
     }
     return f;
@@ -145,9 +128,9 @@ class Reader : public kg::YamlReader {
       }
       if (time == nullptr) fail(what + ": missing 'time' (seconds)", key);
       const double t = number(time->value, what + ".time");
-      if (t < 0) fail(what + ".time: expected seconds >= 0, got " + fmt(t), time->value);
+      if (t < 0) fail(what + ".time: expected seconds >= 0, got " + text::significant(t), time->value);
       if (!times.empty() && !(t > times.back()))
-        fail(what + ".time: key times must increase strictly, " + fmt(t) + " s follows " + fmt(times.back()) +
+        fail(what + ".time: key times must increase strictly, " + text::significant(t) + " s follows " + text::significant(times.back()) +
                  " s",
              time->value);
       const int forms = (scale != nullptr) + (kb != nullptr) + (kl != nullptr);

@@ -2,7 +2,6 @@
 // target.hpp, initial_estimate.hpp and key_spacing.hpp.
 #include <cmath>
 #include <memory>
-#include <sstream>
 
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/nodes.hpp"
@@ -10,6 +9,7 @@
 #include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/target.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg {
 namespace {
@@ -21,17 +21,11 @@ using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s << v;
-  return s.str();
-}
-
 class TargetNode final : public graph::Node {
  public:
   explicit TargetNode(const Params& p) : scale_(p.get<double>("scale")), path_(p.get<std::string>("target")) {
     if (!std::isfinite(scale_) || !(scale_ > 0))
-      throw std::invalid_argument("scale " + fmt(scale_) + ": expected a finite number > 0");
+      throw std::invalid_argument("scale " + text::significant(scale_) + ": expected a finite number > 0");
   }
 
   void run(RunContext& ctx) const override {
@@ -44,7 +38,7 @@ class TargetNode final : public graph::Node {
       t = retarget::load_target(m.skeleton, path_);
       if (scale_ != 1.0) {
         const std::string note =
-            "scale " + fmt(scale_) + " ignored: the target file " + path_ + " sets the lengths";
+            "scale " + text::significant(scale_) + " ignored: the target file " + path_ + " sets the lengths";
         t.notes.push_back(note);
       }
     }

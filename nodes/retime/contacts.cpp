@@ -10,16 +10,11 @@
 #include <stdexcept>
 
 #include "kg/motion/kinematics.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::retime {
 
 namespace {
-
-std::string fmt(double v, int precision = 3) {
-  std::ostringstream s;
-  s << std::setprecision(precision) << v;
-  return s.str();
-}
 
 // "Joint[x y z]" in find_point's syntax, exactly (17 digits round-trip a double).
 std::string point_spec(const motion::Skeleton& sk, const ContactVertex& v) {
@@ -83,7 +78,7 @@ void activate_pair(std::vector<bool>& on, std::size_t point) {
 int touch_where_supported(const motion::Motion& m, const motion::FootplantDetection& d,
                           const FootContactOptions& o, std::vector<std::vector<bool>>& active) {
   if (!(o.support_acceleration >= 0) || !std::isfinite(o.support_acceleration))
-    throw std::invalid_argument("contacts: support_acceleration " + fmt(o.support_acceleration) +
+    throw std::invalid_argument("contacts: support_acceleration " + text::significant(o.support_acceleration, 3) +
                                 " m/s² (expected a finite number >= 0)");
   constexpr double kCaptureGravity = 9.81;  // m/s²
   const int frames = m.frame_count();
@@ -316,8 +311,8 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
     auto at = [&](const ContactVertex& v) { return world[static_cast<std::size_t>(v.joint)] * v.local; };
     notes.push_back("foot " + p.name + ": heel on " + sk.joint(heel.joint).name + ", tip on " +
                     sk.joint(tip.joint).name + ", built at frame " + std::to_string(flat) + ", length " +
-                    fmt((at(p.vertices[1]) - at(p.vertices[0])).norm()) + " m, width " +
-                    fmt((at(p.vertices[1]) - at(p.vertices[2])).norm()) + " m");
+                    text::significant((at(p.vertices[1]) - at(p.vertices[0])).norm(), 3) + " m, width " +
+                    text::significant((at(p.vertices[1]) - at(p.vertices[2])).norm(), 3) + " m");
   }
   const motion::FootplantDetection d = motion::detect_footplants(m, plants);
   const int frames = m.frame_count();
@@ -330,21 +325,21 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   if (supported > 0)
     notes.push_back(std::to_string(supported) +
                     " frames without plants touch where the root is held up (support_acceleration " +
-                    fmt(o.support_acceleration) + " m/s²): a foot near the floor however fast it moves");
+                    text::significant(o.support_acceleration, 3) + " m/s²): a foot near the floor however fast it moves");
   Contacts c = assemble_contacts(m, std::move(patches), active);
   c.source = "detected";
   c.notes = std::move(notes);
   for (const std::string& n : d.notes)
     if (n.rfind("floor", 0) == 0) c.notes.push_back(n);
   if (!d.floor_estimated)
-    c.notes.push_back("floor (given): " + fmt(d.floor) + " m: the soles touch within " +
-                      fmt(o.plants.height_threshold) + " m of it");
+    c.notes.push_back("floor (given): " + text::significant(d.floor, 3) + " m: the soles touch within " +
+                      text::significant(o.plants.height_threshold, 3) + " m of it");
   return c;
 }
 
 Eigen::Matrix<double, 3, 4> friction_basis(double mu) {
   if (!(mu >= 0) || !std::isfinite(mu))
-    throw std::invalid_argument("friction coefficient " + fmt(mu) + ": expected a finite number >= 0");
+    throw std::invalid_argument("friction coefficient " + text::significant(mu, 3) + ": expected a finite number >= 0");
   const double n = 1 / std::sqrt(1 + mu * mu), t = mu * n;
   Eigen::Matrix<double, 3, 4> P;
   P << t, -t, 0, 0,  //

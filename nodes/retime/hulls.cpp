@@ -8,7 +8,6 @@
 #include <cmath>
 #include <limits>
 #include <numbers>
-#include <sstream>
 #include <stdexcept>
 
 #include <Eigen/Cholesky>
@@ -16,6 +15,7 @@
 #include "kg/numerics/bounded_least_squares.hpp"
 
 #include "kg/retime/force_model.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::retime {
 
@@ -23,17 +23,9 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(4);
-  s << v;
-  return s.str();
-}
-std::string fmt(const Eigen::Vector2d& x) {
-  std::ostringstream s;
-  s.precision(4);
-  s << "(" << x.x() << ", " << x.y() << ")";
-  return s.str();
+// A point of the (p̈, ṗ²) plane for messages.
+std::string point_text(const Eigen::Vector2d& x) {
+  return "(" + text::significant(x.x(), 4) + ", " + text::significant(x.y(), 4) + ")";
 }
 
 double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
@@ -364,7 +356,7 @@ void least_squares_hull(const body::BodyModel& body, const FrameTorques& t, cons
                         ? "flight: no contact; the least-squares point of the root's rows"
                         : "infeasible: no timing and contact forces meet every row; the least-squares point "
                           "of every row (bounded-variable least squares)";
-  why += " is " + fmt(x) + ", residual " + fmt(r.residual);
+  why += " is " + point_text(x) + ", residual " + text::significant(r.residual, 4);
   if (!r.converged) why += " (least squares stopped at its iteration limit)";
   append_message(h, why);
 }
@@ -468,8 +460,8 @@ FrameHull frame_hull(const body::BodyModel& body, const std::vector<bool>& root,
   h.centre_is_original = near.distance_squared <= eps * eps;
   h.centre = h.centre_is_original ? original : near.point;
   if (!h.centre_is_original)
-    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " + fmt(h.centre) +
-                          ", " + fmt(std::sqrt(near.distance_squared)) + " away");
+    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " + point_text(h.centre) +
+                          ", " + text::significant(std::sqrt(near.distance_squared), 4) + " away");
   if (lp.minimise_patch_forces_at(h.centre, h.force_directions, h.column_patch) == FrameLp::Result::Optimal) {
     h.centre_lambda = w.lambda;
   } else {

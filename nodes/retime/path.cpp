@@ -6,58 +6,10 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/QR>
-
+#include "kg/motion/filters.hpp"
 #include "kg/motion/rotations.hpp"
 
 namespace kg::retime {
-
-namespace {
-
-// Each column convolved with a normalised Gaussian of `sigma` frames. Past each end the clip
-// continues as the least-squares parabola through the frames within the kernel's reach of that
-// end (the whole clip when it is shorter than the kernel; the line through two frames): a
-// parabola, a ballistic flight, keeps its second derivative exactly to the last frame, where
-// an odd reflection would bend it straight, and a clip shorter than the kernel reads nothing
-// outside itself.
-motion::FrameMatrix gaussian_smoothed(const motion::FrameMatrix& q, double sigma) {
-  const int frames = static_cast<int>(q.rows());
-  const int radius = static_cast<int>(std::ceil(4 * sigma));
-  std::vector<double> kernel(static_cast<std::size_t>(2 * radius + 1));
-  double sum = 0;
-  for (int k = -radius; k <= radius; ++k) sum += kernel[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * k * k / (sigma * sigma));
-  for (double& w : kernel) w /= sum;
-  // The continuations: coefficients of powers of u = (frames from the end, inwards) / reach.
-  const int reach = std::min(frames, radius + 1);
-  const int degree = std::min(2, reach - 1);
-  Eigen::MatrixXd powers(reach, degree + 1);
-  for (int k = 0; k < reach; ++k)
-    for (int d = 0; d <= degree; ++d) powers(k, d) = std::pow(static_cast<double>(k) / reach, d);
-  const Eigen::ColPivHouseholderQR<Eigen::MatrixXd> fit(powers);
-  const Eigen::MatrixXd head = fit.solve(Eigen::MatrixXd(q.topRows(reach)));
-  const Eigen::MatrixXd tail = fit.solve(Eigen::MatrixXd(q.bottomRows(reach).colwise().reverse()));
-  auto continued = [&](const Eigen::MatrixXd& coefficients, int inwards, Eigen::Index c) {
-    const double u = static_cast<double>(inwards) / reach;
-    double v = 0;
-    for (int d = degree; d >= 0; --d) v = v * u + coefficients(d, c);
-    return v;
-  };
-  auto at = [&](int f, Eigen::Index c) {
-    if (f < 0) return continued(head, f, c);
-    if (f >= frames) return continued(tail, frames - 1 - f, c);
-    return q(f, c);
-  };
-  motion::FrameMatrix out(q.rows(), q.cols());
-  for (Eigen::Index c = 0; c < q.cols(); ++c)
-    for (int f = 0; f < frames; ++f) {
-      double v = 0;
-      for (int k = -radius; k <= radius; ++k) v += kernel[static_cast<std::size_t>(k + radius)] * at(f + k, c);
-      out(f, c) = v;
-    }
-  return out;
-}
-
-}  // namespace
 
 PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing) {
   motion.check();
@@ -69,14 +21,15 @@ PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing)
   PathDerivatives d{motion::FrameMatrix::Zero(frames, channels), motion::FrameMatrix::Zero(frames, channels)};
   if (frames < 2) return d;
 
-  // Values with rotation channels unwrapped along the clip (each frame's angle nearest the last).
-  motion::FrameMatrix q = motion.values;
+  // Values with rotation channels unwrapped along the clip, one curve per column.
+  Eigen::MatrixXd q = motion.values;
   for (int c = 0; c < channels; ++c) {
     auto [joint, index] = skeleton.channel_owner(c);
     if (!motion::is_rotation(skeleton.joint(joint).channels[static_cast<std::size_t>(index)].kind)) continue;
-    for (int f = 1; f < frames; ++f) q(f, c) = motion::nearest_angle(q(f, c), q(f - 1, c));
+    motion::unwrap_angles(std::span<double>(q.col(c).data(), static_cast<std::size_t>(frames)));
   }
-  if (smoothing * motion.fps > 0.05) q = gaussian_smoothed(q, smoothing * motion.fps);
+  // A parabola past the ends: a ballistic flight keeps its second derivative to the last frame.
+  if (smoothing * motion.fps > 0.05) q = motion::gaussian_smoothed(q, smoothing * motion.fps, motion::CurveEnds::Parabola);
   const double h = 1.0 / motion.fps;
   if (frames == 2) {
     d.first.row(0) = (q.row(1) - q.row(0)) / h;

@@ -5,23 +5,16 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <stdexcept>
 
 #include "kg/body/body_build.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::retime {
 
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
-
-std::string fmt(double v) {
-  std::ostringstream s;
-  s.precision(4);
-  s << v;
-  return s.str();
-}
 
 std::string clip_name(const ClipLoads& c, std::size_t index) {
   return c.name.empty() ? "clip " + std::to_string(index) : "clip '" + c.name + "'";
@@ -105,9 +98,9 @@ void check_options(const TorqueLimitOptions& o) {
     throw std::invalid_argument(
         "torque limits: margin must be finite and > 0 (limits = margin x the observed "
         "peak; >= 1 keeps the clips' own timing feasible), got " +
-        fmt(o.margin));
+        text::significant(o.margin, 4));
   if (!(std::isfinite(o.floor) && o.floor >= 0))
-    throw std::invalid_argument("torque limits: floor must be finite and >= 0 (N m), got " + fmt(o.floor));
+    throw std::invalid_argument("torque limits: floor must be finite and >= 0 (N m), got " + text::significant(o.floor, 4));
 }
 
 void check_clip(const body::BodyModel& body, const ClipLoads& clip, std::size_t index) {
@@ -278,8 +271,8 @@ TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::spa
   }
 
   const int estimated = static_cast<int>(std::count(out.estimated.begin(), out.estimated.end(), true));
-  out.notes.push_back(std::to_string(estimated) + " channels limited to ±max(" + fmt(options.margin) +
-                      " x peak |τ|, " + fmt(options.floor) + ") over " + std::to_string(clips.size()) +
+  out.notes.push_back(std::to_string(estimated) + " channels limited to ±max(" + text::significant(options.margin, 4) +
+                      " x peak |τ|, " + text::significant(options.floor, 4) + ") over " + std::to_string(clips.size()) +
                       (clips.size() == 1 ? " clip" : " clips"));
   out.notes.push_back(
       "frames observed at (0, 1): " + std::to_string(out.count(FrameUse::Original)) +
@@ -297,7 +290,7 @@ TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::spa
   if (!floored.empty()) {
     std::string list;
     for (const std::string& n : floored) list += (list.empty() ? "" : ", ") + n;
-    out.notes.push_back("at the floor (" + fmt(options.floor) + "): " + list);
+    out.notes.push_back("at the floor (" + text::significant(options.floor, 4) + "): " + list);
   }
   return out;
 }

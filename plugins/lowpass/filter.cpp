@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "kg/motion/filters.hpp"
+
 namespace kg::lowpass {
 namespace {
 
@@ -23,27 +25,14 @@ void check_cutoff(double cutoff_hz, double fps) {
   }
 }
 
-// The signal extended by repeated odd reflection about its end samples, at any index: a
-// straight line continues as itself. Needs at least 2 samples.
-double extended(std::span<const double> x, long i) {
-  const long last = static_cast<long>(x.size()) - 1;
-  double sign = 1, offset = 0;
-  while (i < 0 || i > last) {
-    offset += sign * 2 * (i < 0 ? x[0] : x[static_cast<std::size_t>(last)]);
-    sign = -sign;
-    i = i < 0 ? -i : 2 * last - i;
-  }
-  return offset + sign * x[static_cast<std::size_t>(i)];
-}
-
 // `x` with `pad` extended samples before and after, into `padded`.
 void pad_odd(std::span<const double> x, int pad, std::vector<double>& padded) {
   const long n = static_cast<long>(x.size());
   padded.resize(static_cast<std::size_t>(n + 2 * pad));
   double* p = padded.data();
   for (long k = 0; k < pad; ++k) {
-    p[k] = extended(x, k - pad);
-    p[pad + n + k] = extended(x, n + k);
+    p[k] = motion::odd_extended(x, k - pad);
+    p[pad + n + k] = motion::odd_extended(x, n + k);
   }
   std::copy(x.begin(), x.end(), p + pad);
 }
@@ -136,54 +125,15 @@ double gaussian_sigma_for_cutoff(double cutoff_hz, double fps) {
   return sigma_seconds * fps;
 }
 
-void gaussian_smooth(std::span<double> signal, double sigma_frames, FilterScratch& scratch) {
-  if (!(sigma_frames > 0) || !std::isfinite(sigma_frames)) {
-    throw std::invalid_argument("sigma_frames must be positive, got " + std::to_string(sigma_frames));
-  }
-  const int n = static_cast<int>(signal.size());
-  if (n < 2) return;
-  if (sigma_frames > (1 << 20)) {
-    throw std::invalid_argument("sigma_frames " + std::to_string(sigma_frames) + " is too wide a kernel");
-  }
-  const int radius = static_cast<int>(std::ceil(4 * sigma_frames));
-  std::vector<double>& w = scratch.kernel;
-  w.resize(static_cast<std::size_t>(radius + 1));
-  double total = 0;
-  for (int k = 0; k <= radius; ++k) {
-    w[k] = std::exp(-0.5 * (k / sigma_frames) * (k / sigma_frames));
-    total += k == 0 ? w[k] : 2 * w[k];
-  }
-  for (double& v : w) v /= total;
-
+void gaussian_smooth(std::span<double> signal, double sigma_frames) {
+  if (signal.size() < 2) return;
+  // Smoothing x - x[0] and adding x[0] back is the same linear operation, but keeps a constant
+  // signal bit-exact (all zeros stay zeros).
   const double base = signal[0];
-  for (double& v : signal) v -= base;
-  pad_odd(signal, radius, scratch.padded);
-  const double* p = scratch.padded.data();
-  for (int i = 0; i < n; ++i) {
-    const int c = radius + i;
-    double sum = w[0] * p[c];
-    for (int k = 1; k <= radius; ++k) sum += w[k] * (p[c - k] + p[c + k]);
-    signal[i] = sum + base;
-  }
-}
-
-bool unwrap_angles(std::span<double> angles, std::vector<int>& turns) {
-  turns.assign(angles.size(), 0);
-  constexpr double kTwoPi = 2 * std::numbers::pi;
-  bool unwrapped = false;
-  int turn = 0;
-  double previous = angles.empty() ? 0.0 : angles[0];  // the original value before angles[i]
-  for (std::size_t i = 1; i < angles.size(); ++i) {
-    const double step = angles[i] - previous;
-    previous = angles[i];
-    if (std::abs(step) > std::numbers::pi) turn -= static_cast<int>(std::lround(step / kTwoPi));
-    if (turn != 0) {
-      angles[i] += kTwoPi * turn;
-      turns[i] = turn;
-      unwrapped = true;
-    }
-  }
-  return unwrapped;
+  Eigen::Map<Eigen::VectorXd> curve(signal.data(), static_cast<Eigen::Index>(signal.size()));
+  curve.array() -= base;
+  curve = motion::gaussian_smoothed(curve, sigma_frames, motion::CurveEnds::OddReflection);
+  curve.array() += base;
 }
 
 }  // namespace kg::lowpass

@@ -4,7 +4,7 @@
 //   std::vector<Biquad> sections = butterworth_lowpass(2, 6.0, 120.0);  // 6 Hz at 120 fps
 //   FilterScratch scratch;
 //   filtfilt(sections, samples, scratch);          // in place, no phase lag
-//   gaussian_smooth(samples, gaussian_sigma_for_cutoff(6.0, 120.0), scratch);
+//   gaussian_smooth(samples, gaussian_sigma_for_cutoff(6.0, 120.0));
 //
 // Both filters pass `cutoff_hz` at half amplitude (-6 dB) and leave constants exactly constant
 // and straight lines straight up to the first and last sample: the signal is extended at both
@@ -35,7 +35,6 @@ std::vector<Biquad> butterworth_lowpass(int order, double cutoff_hz, double fps)
 // Reused buffers; one per thread.
 struct FilterScratch {
   std::vector<double> padded;
-  std::vector<double> kernel;
 };
 
 // Frames of padding filtfilt puts before and after the signal: enough for the start-up transient
@@ -56,13 +55,8 @@ void filtfilt(const std::vector<Biquad>& sections, int padding, std::span<double
 double gaussian_sigma_for_cutoff(double cutoff_hz, double fps);
 
 // Convolves `signal` (in place) with a normalised Gaussian of `sigma_frames` (> 0), truncated
-// at 4 sigma, the ends extended by odd reflection. Symmetric kernel: zero phase. Signals of
-// fewer than 2 samples are left alone.
-void gaussian_smooth(std::span<double> signal, double sigma_frames, FilterScratch& scratch);
-
-// Removes 2 pi jumps between consecutive angles (radians): adds 2 pi * turns[i] to angles[i] so
-// that consecutive values differ by at most pi. `turns` gets one entry per angle. Returns
-// whether any angle changed.
-bool unwrap_angles(std::span<double> angles, std::vector<int>& turns);
+// at 4 sigma, the ends extended by odd reflection (kg::motion::gaussian_smoothed). Symmetric
+// kernel: zero phase. Signals of fewer than 2 samples are left alone.
+void gaussian_smooth(std::span<double> signal, double sigma_frames);
 
 }  // namespace kg::lowpass

@@ -1,6 +1,7 @@
 // The example plugin: node `filter.lowpass`, a zero-phase low-pass filter over a motion's channel
 // curves. A thin adapter over filter.hpp; built as lib/kinegraph/plugins/kg_lowpass.so and loaded
 // at run time (graph file: `plugins: [kg_lowpass]`), never linked into the host.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <memory>
@@ -12,6 +13,7 @@
 
 #include "filter.hpp"
 #include "kg/graph/plugin_abi.hpp"
+#include "kg/motion/filters.hpp"
 #include "kg/motion/nodes.hpp"
 
 namespace kg::lowpass {
@@ -115,7 +117,6 @@ class LowpassNode final : public graph::Node {
     // Column-major, so that each channel's curve is contiguous while it is filtered.
     Eigen::MatrixXd curves = in.values;
     FilterScratch scratch;
-    std::vector<int> turns;
     std::int64_t filtered = 0;
     for (const motion::Joint& joint : in.skeleton->joints()) {
       for (std::size_t i = 0; i < joint.channels.size(); ++i) {
@@ -126,9 +127,10 @@ class LowpassNode final : public graph::Node {
         }
         const std::span<double> curve(curves.col(joint.first_channel + static_cast<int>(i)).data(),
                                       static_cast<std::size_t>(frames));
-        const bool unwrapped = rotation && unwrap_angles(curve, turns);
+        const std::vector<int> turns = rotation ? motion::unwrap_angles(curve) : std::vector<int>{};
+        const bool unwrapped = std::any_of(turns.begin(), turns.end(), [](int t) { return t != 0; });
         if (gaussian_) {
-          gaussian_smooth(curve, sigma, scratch);
+          gaussian_smooth(curve, sigma);
         } else {
           filtfilt(sections, padding, curve, scratch);
         }

@@ -173,8 +173,8 @@ void check_close(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double tol)
   CHECK(inf_norm(a - b) <= tol * scale);
 }
 
-std::vector<retime::ExternalForce> random_forces(const motion::Skeleton& s, std::mt19937& rng, int n) {
-  std::vector<retime::ExternalForce> f;
+std::vector<body::ExternalForce> random_forces(const motion::Skeleton& s, std::mt19937& rng, int n) {
+  std::vector<body::ExternalForce> f;
   for (int i = 0; i < n; ++i)
     f.push_back({.joint = std::uniform_int_distribution<int>(0, s.joint_count() - 1)(rng),
                  .point = random_vector(rng, 1.0),
@@ -239,9 +239,9 @@ void check_parts(const BodyModel& body, const Eigen::VectorXd& q, std::mt19937& 
   const Eigen::VectorXd qd = random_values(s, rng, 2, 3), qdd = random_values(s, rng, 5, 10);
   Eigen::VectorXd tau(n), bias(n);
   Eigen::MatrixXd M(n, n);
-  retime::inverse_dynamics(body, q, qd, qdd, g, {}, ws, tau);
-  retime::mass_matrix(body, q, ws, M);
-  retime::bias_forces(body, q, qd, g, ws, bias);
+  body::inverse_dynamics(body, q, qd, qdd, g, {}, ws, tau);
+  body::mass_matrix(body, q, ws, M);
+  body::bias_forces(body, q, qd, g, ws, bias);
   CHECK((M - M.transpose()).cwiseAbs().maxCoeff() <= 1e-12 * std::max(1.0, M.cwiseAbs().maxCoeff()));
   check_close(M * qdd + bias, tau, 1e-9);
   // The mass matrix is positive definite when every channel moves some mass; at least semidefinite.
@@ -274,7 +274,7 @@ void check_against_kinematics(const BodyModel& body, const Eigen::VectorXd& q, s
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
   motion::forward_kinematics(s, q.transpose(), world);
   Eigen::MatrixXd M(n, n);
-  retime::mass_matrix(body, q, ws, M);
+  body::mass_matrix(body, q, ws, M);
   for (std::size_t j = 0; j < world.size(); ++j)
     CHECK(ws.kinematics.world[j].matrix().isApprox(world[j].matrix(), 1e-12));
 
@@ -295,7 +295,7 @@ void check_against_kinematics(const BodyModel& body, const Eigen::VectorXd& q, s
   CHECK(qd.dot(M * qd) == Approx(energy).epsilon(1e-7));
 
   Eigen::VectorXd zero = Eigen::VectorXd::Zero(n), tau(n);
-  retime::inverse_dynamics(body, q, zero, zero, g, {}, ws, tau);
+  body::inverse_dynamics(body, q, zero, zero, g, {}, ws, tau);
   check_close(tau, gravity_torque, 1e-9);
 
   // Coriolis and centrifugal forces from the Lagrangian: C q̇ = Ṁ q̇ − ½ ∂(q̇ᵀ M q̇)/∂q, with M's
@@ -303,32 +303,32 @@ void check_against_kinematics(const BodyModel& body, const Eigen::VectorXd& q, s
   {
     const double h = 1e-5;
     Eigen::MatrixXd Mp(n, n), Mm(n, n);
-    retime::mass_matrix(body, q + h * qd, ws, Mp);
-    retime::mass_matrix(body, q - h * qd, ws, Mm);
+    body::mass_matrix(body, q + h * qd, ws, Mp);
+    body::mass_matrix(body, q - h * qd, ws, Mm);
     Eigen::VectorXd lagrange = (Mp - Mm) / (2 * h) * qd;
     for (int i = 0; i < n; ++i) {
       Eigen::VectorXd e = Eigen::VectorXd::Zero(n);
       e[i] = h;
-      retime::mass_matrix(body, q + e, ws, Mp);
-      retime::mass_matrix(body, q - e, ws, Mm);
+      body::mass_matrix(body, q + e, ws, Mp);
+      body::mass_matrix(body, q - e, ws, Mm);
       lagrange[i] -= 0.5 * qd.dot((Mp - Mm) / (2 * h) * qd);
     }
     Eigen::VectorXd coriolis(n);
-    retime::bias_forces(body, q, qd, Eigen::Vector3d::Zero(), ws, coriolis);
+    body::bias_forces(body, q, qd, Eigen::Vector3d::Zero(), ws, coriolis);
     check_close(coriolis, lagrange, 1e-6);
   }
 
   // A force on a segment: −Jᵀ f at its point (no couple: point_jacobian has no angular part).
-  const std::vector<retime::ExternalForce> pushes = {
+  const std::vector<body::ExternalForce> pushes = {
       {.joint = s.joint_count() - 1, .point = random_vector(rng, 1), .force = random_vector(rng, 40)},
       {.joint = s.joint_count() / 2, .point = random_vector(rng, 1), .force = random_vector(rng, 40)}};
   Eigen::VectorXd expected = gravity_torque;
-  for (const retime::ExternalForce& p : pushes) {
+  for (const body::ExternalForce& p : pushes) {
     const Eigen::Vector3d local = world[static_cast<std::size_t>(p.joint)].inverse() * p.point;
     motion::point_jacobian(s, q.transpose(), world, p.joint, local, J);
     expected -= J.transpose() * p.force;
   }
-  retime::inverse_dynamics(body, q, zero, zero, g, pushes, ws, tau);
+  body::inverse_dynamics(body, q, zero, zero, g, pushes, ws, tau);
   check_close(tau, expected, 1e-9);
 }
 
@@ -374,12 +374,12 @@ void check_path_polynomials(const BodyModel& body, const motion::Motion& clip, c
     for (int trial = 0; trial < 3; ++trial) {
       const double pdot = uniform(rng, 0.2, 3), pddot = uniform(rng, -4, 4), k = uniform(rng, 0, 12);
       const Eigen::Vector3d g = random_vector(rng, 12);
-      retime::inverse_dynamics(body, q, q1 * pdot, q2 * pdot * pdot + q1 * pddot, g, {}, ws, tau);
+      body::inverse_dynamics(body, q, q1 * pdot, q2 * pdot * pdot + q1 * pddot, g, {}, ws, tau);
       check_close(ft.at(pdot * pdot, pddot, g), tau, 1e-9);
       BodyModel heavy = body;
       heavy.segments[static_cast<std::size_t>(joint)].mass *= k;
       heavy.segments[static_cast<std::size_t>(joint)].inertia *= k;
-      retime::inverse_dynamics(heavy, q, q1 * pdot, q2 * pdot * pdot + q1 * pddot, g, {}, ws, tau);
+      body::inverse_dynamics(heavy, q, q1 * pdot, q2 * pdot * pdot + q1 * pddot, g, {}, ws, tau);
       check_close(ms.at(k).at(pdot * pdot, pddot, g), tau, 1e-9);
       check_close(heavier.edited(f, k).at(pdot * pdot, pddot, g), tau, 1e-9);
     }
@@ -417,7 +417,7 @@ Eigen::VectorXd from_kdl(const motion::Skeleton& s, const KDL::JntArray& tau) {
 }
 
 // KDL wants each external wrench in its segment's frame about that frame's origin.
-KDL::Wrench kdl_wrench(const retime::ExternalForce& p, const Eigen::Isometry3d& W) {
+KDL::Wrench kdl_wrench(const body::ExternalForce& p, const Eigen::Isometry3d& W) {
   const Eigen::Vector3d moment = (p.point - W.translation()).cross(p.force) + p.torque;
   return KDL::Wrench(test::kdl(Eigen::Vector3d(W.linear().transpose() * p.force)),
                      test::kdl(Eigen::Vector3d(W.linear().transpose() * moment)));
@@ -430,11 +430,11 @@ void check_tree_against_kdl(const BodyModel& body, const Eigen::VectorXd& q, std
   REQUIRE(static_cast<int>(k.tree.getNrOfJoints()) == s.channel_count());
   const Eigen::VectorXd qd = random_values(s, rng, 2, 3), qdd = random_values(s, rng, 5, 10);
   const Eigen::Vector3d g = random_vector(rng, 10);
-  const std::vector<retime::ExternalForce> pushes = random_forces(s, rng, 3);
+  const std::vector<body::ExternalForce> pushes = random_forces(s, rng, 3);
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
   motion::forward_kinematics(s, q.transpose(), world);
   KDL::WrenchMap wrenches;
-  for (const retime::ExternalForce& p : pushes) {
+  for (const body::ExternalForce& p : pushes) {
     KDL::Wrench& w = wrenches[k.last_segment[static_cast<std::size_t>(p.joint)]];
     w = w + kdl_wrench(p, world[static_cast<std::size_t>(p.joint)]);
   }
@@ -442,7 +442,7 @@ void check_tree_against_kdl(const BodyModel& body, const Eigen::VectorXd& q, std
   KDL::JntArray ktau(in.q.rows());
   KDL::TreeIdSolver_RNE solver(k.tree, test::kdl(g));
   REQUIRE(solver.CartToJnt(in.q, in.qd, in.qdd, wrenches, ktau) == 0);
-  check_close(retime::inverse_dynamics(body, q, qd, qdd, g, pushes), from_kdl(s, ktau), 1e-9);
+  check_close(body::inverse_dynamics(body, q, qd, qdd, g, pushes), from_kdl(s, ktau), 1e-9);
 }
 
 }  // namespace
@@ -462,11 +462,11 @@ TEST_CASE("inverse dynamics equals KDL's ChainIdSolver_RNE on fixed-base chains"
       const Eigen::VectorXd q = random_values(*s, rng, 0.5, std::numbers::pi);
       const Eigen::VectorXd qd = random_values(*s, rng, 2, 3), qdd = random_values(*s, rng, 5, 10);
       const Eigen::Vector3d g = random_vector(rng, 10);
-      const std::vector<retime::ExternalForce> pushes = random_forces(*s, rng, trial % 3);
+      const std::vector<body::ExternalForce> pushes = random_forces(*s, rng, trial % 3);
       std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s->joint_count()));
       motion::forward_kinematics(*s, q.transpose(), world);
       KDL::Wrenches wrenches(k.chain.getNrOfSegments(), KDL::Wrench::Zero());
-      for (const retime::ExternalForce& p : pushes) {
+      for (const body::ExternalForce& p : pushes) {
         KDL::Wrench& w =
             wrenches[static_cast<std::size_t>(k.last_chain_segment[static_cast<std::size_t>(p.joint)])];
         w = w + kdl_wrench(p, world[static_cast<std::size_t>(p.joint)]);
@@ -479,10 +479,10 @@ TEST_CASE("inverse dynamics equals KDL's ChainIdSolver_RNE on fixed-base chains"
 
       retime::DynamicsWorkspace ws;
       Eigen::VectorXd tau(n);
-      retime::inverse_dynamics(body, q, qd, qdd, g, pushes, ws, tau);
+      body::inverse_dynamics(body, q, qd, qdd, g, pushes, ws, tau);
       check_close(tau, expected, 1e-9);
       // The allocating overload agrees.
-      check_close(retime::inverse_dynamics(body, q, qd, qdd, g, pushes), expected, 1e-9);
+      check_close(body::inverse_dynamics(body, q, qd, qdd, g, pushes), expected, 1e-9);
     }
   }
 }
@@ -568,7 +568,7 @@ TEST_CASE("the root's residual holds the figure: its weight and the moment about
     const Eigen::VectorXd q = random_values(*s, rng, 2, std::numbers::pi);
     const Eigen::VectorXd zero = Eigen::VectorXd::Zero(s->channel_count());
     const Eigen::Vector3d g(0.5, -9.81, -0.2);
-    const Eigen::VectorXd tau = retime::inverse_dynamics(body, q, zero, zero, g);
+    const Eigen::VectorXd tau = body::inverse_dynamics(body, q, zero, zero, g);
 
     std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s->joint_count()));
     motion::forward_kinematics(*s, q.transpose(), world);
@@ -655,31 +655,31 @@ TEST_CASE("inverse dynamics refuses bad input with a message") {
   retime::DynamicsWorkspace ws;
   Eigen::VectorXd tau(n);
   const Eigen::Vector3d g(0, -9.81, 0);
-  CHECK_THROWS_WITH(retime::inverse_dynamics(body, shorter, q, q, g, {}, ws, tau),
+  CHECK_THROWS_WITH(body::inverse_dynamics(body, shorter, q, q, g, {}, ws, tau),
                     Contains("q has " + std::to_string(n - 1) + " values"));
-  CHECK_THROWS_WITH(retime::inverse_dynamics(body, q, q, shorter, g, {}, ws, tau),
+  CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, shorter, g, {}, ws, tau),
                     Contains("q acceleration"));
-  const std::vector<retime::ExternalForce> bad_joint = {{.joint = 9}};
-  CHECK_THROWS_WITH(retime::inverse_dynamics(body, q, q, q, g, bad_joint, ws, tau),
+  const std::vector<body::ExternalForce> bad_joint = {{.joint = 9}};
+  CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, q, g, bad_joint, ws, tau),
                     Contains("acts on joint 9") && Contains("expected 0..3"));
-  const std::vector<retime::ExternalForce> nan_force = {{.joint = 1, .force = {NAN, 0, 0}}};
-  CHECK_THROWS_WITH(retime::inverse_dynamics(body, q, q, q, g, nan_force, ws, tau), Contains("not finite"));
+  const std::vector<body::ExternalForce> nan_force = {{.joint = 1, .force = {NAN, 0, 0}}};
+  CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, q, g, nan_force, ws, tau), Contains("not finite"));
   Eigen::MatrixXd small(n - 1, n);
-  CHECK_THROWS_WITH(retime::mass_matrix(body, q, ws, small), Contains("expected " + std::to_string(n)));
+  CHECK_THROWS_WITH(body::mass_matrix(body, q, ws, small), Contains("expected " + std::to_string(n)));
 
   BodyModel bad = body;
   bad.segments.pop_back();
-  CHECK_THROWS_WITH(retime::inverse_dynamics(bad, q, q, q, g, {}, ws, tau),
+  CHECK_THROWS_WITH(body::inverse_dynamics(bad, q, q, q, g, {}, ws, tau),
                     Contains("3 segments for 4 joints"));
   bad = body;
   bad.segments[2].mass = -1;
-  CHECK_THROWS_WITH(retime::inverse_dynamics(bad, q, q, q, g, {}, ws, tau), Contains("segment 'j2': mass"));
+  CHECK_THROWS_WITH(body::inverse_dynamics(bad, q, q, q, g, {}, ws, tau), Contains("segment 'j2': mass"));
   bad = body;
   bad.segments[1].inertia(0, 1) += 1;
-  CHECK_THROWS_WITH(retime::bias_forces(bad, q, q, g, ws, tau), Contains("'j1': inertia is not symmetric"));
+  CHECK_THROWS_WITH(body::bias_forces(bad, q, q, g, ws, tau), Contains("'j1': inertia is not symmetric"));
   bad = body;
   bad.skeleton = nullptr;
-  CHECK_THROWS_WITH(retime::inverse_dynamics(bad, q, q, q, g, {}, ws, tau), Contains("no skeleton"));
+  CHECK_THROWS_WITH(body::inverse_dynamics(bad, q, q, q, g, {}, ws, tau), Contains("no skeleton"));
 
   motion::Motion clip{s, motion::FrameMatrix::Zero(5, n), 30, "still"};
   const retime::PathDerivatives d = retime::path_derivatives(clip);

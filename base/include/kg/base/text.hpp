@@ -1,17 +1,20 @@
 // Number <-> text in one place, so params, messages, reports and graph
-// files print and parse numbers alike (shortest text that reads back to the same double); and
-// the file extension files are told apart by.
+// files print and parse numbers alike (shortest text that reads back to the same double); the
+// few significant digits of a message; lists joined for messages; and the file extension files
+// are told apart by.
 #pragma once
 
 #include <algorithm>
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <string_view>
+#include <vector>
 
 namespace kg::text {
 
@@ -24,6 +27,29 @@ inline std::string format_double(double x) {
   std::string s(buf, end);
   if (s.find_first_of(".en") == std::string::npos) s += ".0";
   return s;
+}
+
+// `x` to `digits` significant digits (printf's %.*g, what an ostream prints at that precision):
+// for messages and logs, where 0.1234 reads better than 0.12340000000000001; never for data.
+inline std::string significant(double x, int digits = 6) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+  return buf;
+}
+
+// 'name': a name or a value quoted in a message.
+inline std::string in_quotes(std::string_view text) {
+  return "'" + std::string(text) + "'";
+}
+
+// `items` with `separator` between them ("a, b, c"; "" for none).
+inline std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
+  std::string out;
+  for (std::size_t i = 0; i < items.size(); ++i) {
+    if (i) out += separator;
+    out += items[i];
+  }
+  return out;
 }
 
 inline std::string_view trim(std::string_view s) {

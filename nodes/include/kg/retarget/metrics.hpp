@@ -34,7 +34,7 @@
 //                         Energy added above f_c is what no displacement of that spacing could
 //                         have added: the per-frame IK's snaps. Measured on the displacement d =
 //                         result - reference (the initial estimate when given, else the source;
-//                         rotations wrapped to (-pi, pi] and unwrapped over time) with the
+//                         rotations unwrapped over time from within pi of 0) with the
 //                         orthonormal DCT-II of each channel (the DFT of its even extension,
 //                         so no spurious edge discontinuity leaks into high frequencies): bin m
 //                         is m fps / (2 N) Hz; the figure is sum over bins above f_c of X_m^2 as a
@@ -93,9 +93,6 @@ struct JerkFigures {
   int rotation_channels = 0;
   int samples = 0;  // third differences per channel: frames - 3 (0 below 4 frames)
 };
-// Rotation channel values made continuous over time: y0 = x0 (wrapped to (-pi, pi] when `wrap_first`),
-// y[f] = y[f-1] + (x[f] - x[f-1] wrapped to (-pi, pi]).
-Eigen::VectorXd unwrap_angles(const Eigen::Ref<const Eigen::VectorXd>& x, bool wrap_first = false);
 JerkFigures rms_jerk(const motion::Motion& motion);
 // Jerk of the displacement result - reference (same frame count and channel layout, else
 // std::invalid_argument).

@@ -1,18 +1,11 @@
-// Inverse dynamics of a body model (body_model.hpp) along a clip, and the generalised forces of a
-// clip's path as functions of its retiming (McCann et al. 2006 §3.1, eq. 1-6): the "Force" step
-// of the paper's fig. 12, run once per frame before any retiming.
+// The generalised forces of a clip's path as functions of its retiming (McCann et al. 2006 §3.1,
+// eq. 1-6): the "Force" step of the paper's fig. 12, run once per frame before any retiming. The
+// numeric inverse dynamics they build on is body::inverse_dynamics (kg/body/inverse_dynamics.hpp).
 //
-// Generalised coordinates are the skeleton's channels (skeleton.hpp), each a one-degree-of-freedom
-// joint; τ has one entry per channel, newtons for position channels and newton metres for
-// rotation ones. τ is what the figure's joints must apply, plus for the root channels the
-// residual the environment must supply: the world force along each root position channel's axis
-// and the moment about the root joint's origin around each root rotation channel's axis. External
-// forces (ExternalForce: contacts, pushes) act on the figure and are subtracted: τ = M q̈ + C + G − Jᵀ f.
-// Gravity is a world vector (m/s², +Y up: (0, −9.81, 0) on Earth).
+// Generalised coordinates, units and gravity are body::inverse_dynamics' (one entry of τ per
+// channel; gravity a world vector, m/s², +Y up).
 //
 //   DynamicsWorkspace ws;                                      // caller-owned, reused
-//   Eigen::VectorXd tau(channels);
-//   inverse_dynamics(body, q, qd, qdd, body.gravity, {}, ws, tau);
 //   PathDerivatives d = path_derivatives(clip);
 //   FrameTorques ft = frame_torques(body, clip, d, f, ws);    // τ(ṗ², p̈, g) at frame f
 //   Eigen::VectorXd t = ft.at(pdot * pdot, pddot, body.gravity);
@@ -37,6 +30,7 @@
 #include "kg/retime/path.hpp"
 #include "kg/retime/path_torques.hpp"
 #include "kg/retime/polynomial.hpp"
+#include "kg/body/inverse_dynamics.hpp"
 #include "kg/body/rnea.hpp"
 
 namespace kg::retime {
@@ -75,44 +69,13 @@ using PathMassForce =
     Polynomial<UnionBasis<PathAcceleration::BasisType,
                           ProductBasis<PathMassScale::BasisType, PathAcceleration::BasisType>>>;
 
-// Buffers of every function below, sized for one skeleton at a time (reusable across skeletons;
-// it regrows). Its contents are scratch: nothing in it is meaningful between calls.
-struct DynamicsWorkspace {
-  body::DynamicsTopology topology;
-  body::FrameKinematics kinematics;
-  body::RneaBuffers<double, double, double> numeric;
+// Buffers of every function below: the numeric recursions' (body::DynamicsWorkspace) and the path
+// recursion's, sized for one skeleton at a time (reusable across skeletons; it regrows). Its
+// contents are scratch: nothing in it is meaningful between calls.
+struct DynamicsWorkspace : body::DynamicsWorkspace {
   body::RneaBuffers<PathVelocity, PathAcceleration, PathAcceleration> path;
   body::RneaBuffers<PathVelocity, PathAcceleration, PathMassForce> path_mass;
-  std::vector<body::Spatial<double>> external;  // per joint
-  std::vector<body::SpatialInertia> composite;  // per joint
 };
-
-// A force the environment applies to one segment.
-struct ExternalForce {
-  int joint = -1;                                    // the segment it acts on (joint index)
-  Eigen::Vector3d point = Eigen::Vector3d::Zero();   // where it acts: world, metres
-  Eigen::Vector3d force = Eigen::Vector3d::Zero();   // world, newtons
-  Eigen::Vector3d torque = Eigen::Vector3d::Zero();  // an additional pure couple: world, newton metres
-};
-
-// τ (channel_count) that moves the figure through q (frame values: metres, radians), q̇ and q̈
-// (channel_count each, per second and per second²) under `gravity` (world, m/s²) with `external`
-// forces acting on it.
-void inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd, motion::FrameRef qdd,
-                      const Eigen::Vector3d& gravity, std::span<const ExternalForce> external,
-                      DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> tau);
-// The same, allocating its result.
-Eigen::VectorXd inverse_dynamics(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
-                                 motion::FrameRef qdd, const Eigen::Vector3d& gravity,
-                                 std::span<const ExternalForce> external = {});
-
-// The joint-space mass matrix M(q) (channel_count x channel_count, symmetric) by the composite
-// rigid body algorithm, independently of the recursion above.
-void mass_matrix(const body::BodyModel& body, motion::FrameRef q, DynamicsWorkspace& ws,
-                 Eigen::Ref<Eigen::MatrixXd> M);
-// C(q, q̇) q̇ + G(q): τ at zero acceleration and no external force (channel_count).
-void bias_forces(const body::BodyModel& body, motion::FrameRef q, motion::FrameRef qd,
-                 const Eigen::Vector3d& gravity, DynamicsWorkspace& ws, Eigen::Ref<Eigen::VectorXd> bias);
 
 // τ(ṗ², p̈, g) at source frame `frame` of `clip` (whose skeleton has body's channels), with q', q''
 // from `d` = path_derivatives(clip): velocity = M q'' + C(q, q') q', acceleration = M q', gravity =

@@ -1,0 +1,35 @@
+// Text helpers of kg/base/text.hpp that messages across the tree share.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+
+#include "kg/base/text.hpp"
+
+using namespace kg;
+
+TEST_CASE("significant: printf's %g at a number of digits", "[text]") {
+  CHECK(text::significant(0.123456789) == "0.123457");
+  CHECK(text::significant(0.123456789, 3) == "0.123");
+  CHECK(text::significant(1234567.0) == "1.23457e+06");
+  CHECK(text::significant(70.0, 4) == "70");
+  CHECK(text::significant(-0.5, 4) == "-0.5");
+  CHECK(text::significant(HUGE_VAL) == "inf");
+  CHECK(text::significant(-HUGE_VAL) == "-inf");
+}
+
+TEST_CASE("join and in_quotes", "[text]") {
+  CHECK(text::join({}) == "");
+  CHECK(text::join({"a"}) == "a");
+  CHECK(text::join({"a", "b", "c"}) == "a, b, c");
+  CHECK(text::join({"x", "y"}, " -> ") == "x -> y");
+  CHECK(text::join({"", "b"}) == ", b");  // an empty item keeps its place
+  CHECK(text::in_quotes("lfoot") == "'lfoot'");
+}
+
+TEST_CASE("format_double and parse_double round-trip", "[text]") {
+  for (double x : {0.1, 1.0 / 3, 1e-300, 123456789.125, -2.5})
+    CHECK(text::parse_double(text::format_double(x)) == x);
+  CHECK(text::format_double(2.0) == "2.0");
+  CHECK_FALSE(text::parse_double("nan").has_value());
+  CHECK(text::lower_extension("dir/Walk.BVH") == ".bvh");
+}
