@@ -18,7 +18,9 @@
 # INSTALL_DESTINATION  where `cmake --install` puts it: default ${KINEGRAPH_PLUGIN_INSTALL_DIR}
 #                   when set, else lib/kinegraph/plugins. Installed into Kinegraph's own prefix,
 #                   the CLI finds it by its bare name; elsewhere, name that folder in
-#                   KINEGRAPH_PLUGIN_PATH or --plugin-dir.
+#                   KINEGRAPH_PLUGIN_PATH or --plugin-dir. `INSTALL_DESTINATION
+#                   ${Kinegraph_PLUGIN_DIR}` installs into Kinegraph's prefix whatever the
+#                   project's CMAKE_INSTALL_PREFIX.
 # NO_INSTALL        no install rule (test modules).
 #
 # Its install RPATH finds Kinegraph's libraries both when it is installed into Kinegraph's prefix
