@@ -3,6 +3,9 @@
 #   bash scripts/dev.sh demo    install what is missing, build, run graphs/demo.yaml (writes out/)
 #   bash scripts/dev.sh test    install what is missing, build, run every test with CTest
 #   bash scripts/dev.sh build   install what is missing and build only
+#   bash scripts/dev.sh install [PREFIX]   install what is missing, build, and install Kinegraph into
+#                               PREFIX (default /usr/local): PREFIX/bin/kinegraph, its libraries,
+#                               headers and CMake package (README, "Installing" and "Writing a plugin")
 # Environment: BUILD_DIR (default build), JOBS (default nproc), KG_SKIP_BLENDER=1 skips installing
 # Blender (its tests then skip with a message).
 set -euo pipefail
@@ -32,8 +35,27 @@ install_missing() {
 }
 
 build() {
-  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release
+  cmake -S . -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release "$@"
   cmake --build "$build_dir" -j "$jobs"
+}
+
+# install PREFIX: builds with PREFIX as the install prefix (so that GNUInstallDirs picks its
+# library folder) and installs there, with sudo when PREFIX is not writable.
+install_into() {
+  local prefix
+  prefix=$(realpath -m "$1")
+  build -DCMAKE_INSTALL_PREFIX="$prefix"
+  local sudo=()
+  local existing=$prefix
+  while [[ ! -e $existing ]]; do existing=$(dirname "$existing"); done
+  [[ -w $existing && ( ! -e $prefix || -w $prefix ) ]] || sudo=(sudo)
+  "${sudo[@]}" cmake --install "$build_dir"
+  echo "Installed Kinegraph in $prefix ($build_dir/install_manifest.txt lists every file)."
+  if [[ $(command -v kinegraph || true) == "$prefix/bin/kinegraph" ]]; then
+    echo "kinegraph is on your PATH: $prefix/bin/kinegraph"
+  else
+    echo "Add $prefix/bin to your PATH to run kinegraph:  export PATH=\"$prefix/bin:\$PATH\""
+  fi
 }
 
 case "${1:-}" in
@@ -53,8 +75,12 @@ case "${1:-}" in
     install_missing "${build_packages[@]}"
     build
     ;;
+  install)
+    install_missing "${build_packages[@]}"
+    install_into "${2:-/usr/local}"
+    ;;
   *)
-    echo "usage: bash scripts/dev.sh demo|test|build" >&2
+    echo "usage: bash scripts/dev.sh demo|test|build|install [PREFIX]" >&2
     exit 2
     ;;
 esac
