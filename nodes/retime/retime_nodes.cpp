@@ -4,9 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <functional>
-#include <future>
-#include <list>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -168,99 +165,6 @@ NodeType torque_limits_node_type() {
   return {std::move(spec), [](const Params& p) { return std::make_unique<TorqueLimitsNode>(p); }};
 }
 
-// Hulls shared by the retime.hulls nodes of a run that build the same thing: the same input
-// objects (the same upstream outputs, not equal copies) and the same gravity, mass scale and
-// options once the body's defaults are applied. graphs/retime.yaml's `reference` (the unedited
-// body) and `hulls` (gravity and mass_scale from its variables) are such a pair when nothing is
-// edited; the hulls are the costliest step of the pipeline. A node arriving while another builds
-// waits for it. Entries name their inputs and results weakly: they match only while those objects
-// live (so an address cannot be reused by another object meanwhile), and are dropped at the next
-// lookup once they are gone.
-struct HullsKey {
-  const void* body = nullptr;
-  const void* contacts = nullptr;
-  const void* torques = nullptr;
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
-  double mass_scale = 1;
-  HullOptions options{};
-
-  bool operator==(const HullsKey& o) const {
-    return body == o.body && contacts == o.contacts && torques == o.torques && gravity == o.gravity &&
-           mass_scale == o.mass_scale && options.pddot_max == o.options.pddot_max &&
-           options.pdot2_max == o.options.pdot2_max && options.tolerance == o.options.tolerance &&
-           options.initial_directions == o.options.initial_directions && options.max_lps == o.options.max_lps;
-  }
-};
-
-struct BuiltHulls {
-  std::weak_ptr<const Hulls> hulls;
-  std::weak_ptr<const PathTorques> torques;
-  double seconds = 0;  // the build's wall time
-};
-
-class HullsMemo {
- public:
-  // The hulls for `key`: built by `build` (returning strong references, which the caller keeps
-  // alive by outputting them), or shared from a node that built or is building them. `shared` says
-  // which. A build that throws throws in every node waiting for it.
-  struct Result {
-    std::shared_ptr<const Hulls> hulls;
-    std::shared_ptr<const PathTorques> torques;
-    double seconds = 0;
-    bool shared = false;
-  };
-  Result get(const HullsKey& key, std::vector<std::weak_ptr<const void>> inputs,
-             const std::function<Result()>& build) {
-    std::shared_future<BuiltHulls> pending;
-    std::promise<BuiltHulls> mine;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      entries_.remove_if([](const Entry& e) { return e.expired(); });
-      for (const Entry& e : entries_)
-        if (e.key == key) pending = e.result;
-      if (!pending.valid()) entries_.push_back({key, std::move(inputs), mine.get_future().share()});
-    }
-    if (pending.valid()) {
-      const BuiltHulls built = pending.get();  // rethrows the builder's failure
-      Result r{built.hulls.lock(), built.torques.lock(), built.seconds, true};
-      if (r.hulls && r.torques) return r;
-      return build();  // released already (another run's): build again
-    }
-    try {
-      Result r = build();
-      mine.set_value({r.hulls, r.torques, r.seconds});
-      return r;
-    } catch (...) {
-      mine.set_exception(std::current_exception());
-      throw;
-    }
-  }
-
- private:
-  struct Entry {
-    HullsKey key;
-    std::vector<std::weak_ptr<const void>> inputs;
-    std::shared_future<BuiltHulls> result;
-    bool expired() const {
-      for (const auto& input : inputs)
-        if (input.expired()) return true;
-      if (result.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
-      try {
-        return result.get().hulls.expired();
-      } catch (...) {
-        return true;  // a failed build: the next node tries again
-      }
-    }
-  };
-  std::mutex mutex_;
-  std::list<Entry> entries_;
-};
-
-HullsMemo& hulls_memo() {
-  static HullsMemo memo;
-  return memo;
-}
-
 class HullsNode final : public graph::Node {
  public:
   explicit HullsNode(const Params& p)
@@ -272,12 +176,9 @@ class HullsNode final : public graph::Node {
   }
 
   void run(RunContext& ctx) const override {
-    const auto body_in = ctx.input_value("body").get_shared<body::BodyModel>();
-    const auto contacts_in = ctx.input_value("contacts").get_shared<Contacts>();
-    const auto source_in = ctx.input_value("torques").get_shared<PathTorques>();
-    body::BodyModel body = *body_in;
-    const Contacts& contacts = *contacts_in;
-    const PathTorques& source = *source_in;
+    body::BodyModel body = ctx.input<body::BodyModel>("body");
+    const Contacts& contacts = ctx.input<Contacts>("contacts");
+    const PathTorques& source = ctx.input<PathTorques>("torques");
     if (contacts.frame_count() != source.frame_count())
       throw std::invalid_argument("the contacts have " + std::to_string(contacts.frame_count()) +
                                   " frames and the torques " + std::to_string(source.frame_count()));
@@ -291,20 +192,13 @@ class HullsNode final : public graph::Node {
           "floor), or give the contacts in a file (path)");
     body.gravity = gravity_from(gravity_, body.gravity);
     if (mass_scale_ != 1) ctx.log("segment " + source.segment + " weighs " + std::to_string(mass_scale_) + " times its mass");
-    const HullsKey key{body_in.get(), contacts_in.get(), source_in.get(), body.gravity, mass_scale_, options_};
-    const HullsMemo::Result built = hulls_memo().get(key, {body_in, contacts_in, source_in}, [&] {
-      // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
-      auto edited = std::make_shared<PathTorques>(PathTorques{source.skeleton, source.fps, {}, "", {}});
-      edited->frames.reserve(source.frames.size());
-      for (int f = 0; f < source.frame_count(); ++f) edited->frames.push_back(source.edited(f, mass_scale_));
-      const auto start = std::chrono::steady_clock::now();
-      auto hulls = std::make_shared<const Hulls>(build_hulls(body, contacts, edited->frames, options_));
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      return HullsMemo::Result{std::move(hulls), std::move(edited), seconds, false};
-    });
-    const Hulls& hulls = *built.hulls;
-    const double seconds = built.seconds;
-    if (built.shared) ctx.log("the same hulls as another retime.hulls node of this run (same inputs and settings): shared");
+    // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
+    PathTorques edited{source.skeleton, source.fps, {}, "", {}};
+    edited.frames.reserve(source.frames.size());
+    for (int f = 0; f < source.frame_count(); ++f) edited.frames.push_back(source.edited(f, mass_scale_));
+    const auto start = std::chrono::steady_clock::now();
+    Hulls hulls = build_hulls(body, contacts, edited.frames, options_);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     long lps = 0;
     for (const FrameHull& h : hulls.frames) lps += h.lp_count;
     const int frames = static_cast<int>(hulls.frames.size());
@@ -314,14 +208,13 @@ class HullsNode final : public graph::Node {
     ctx.report("infeasible", static_cast<std::int64_t>(hulls.count(HullStatus::Infeasible)));
     ctx.report("lps_per_frame", frames ? static_cast<double>(lps) / frames : 0.0);
     ctx.report("ms_per_frame", frames ? 1000 * seconds / frames : 0.0);
-    ctx.report("shared", built.shared);  // built by another node of the run: ms_per_frame is its
     std::ostringstream log;
     log << frames << " hulls: " << hulls.count(HullStatus::Feasible) << " feasible, "
         << hulls.count(HullStatus::Flight) << " in flight, " << hulls.count(HullStatus::Infeasible)
         << " not exactly physical (closest point); gravity (" << body.gravity.transpose() << ") m/s^2";
     ctx.log(log.str());
-    ctx.set_output("hulls", graph::Value::share(built.hulls));
-    ctx.set_output("torques", graph::Value::share(built.torques));
+    ctx.output("hulls", std::move(hulls));
+    ctx.output("torques", std::move(edited));
   }
 
  private:
@@ -340,8 +233,8 @@ NodeType hulls_node_type() {
              "centre at the original timing (0, 1) of least contact force; the force model's fan (§3.4). Frames "
              "in flight and frames no contact forces can explain get their least-squares point, reported. The "
              "physical edits of §4.2 (`gravity`, a segment's `mass_scale`) change the coefficients, not the "
-             "inverse dynamics. Nodes of one run with the same inputs and settings (graphs/retime.yaml's "
-             "reference and hulls when nothing is edited) build once and share the hulls.",
+             "inverse dynamics. Nodes of one run with the same params and inputs (graphs/retime.yaml's "
+             "reference and hulls when nothing is edited) build once: the executor shares their results.",
       .inputs = {{"body", "kg.BodyModel", true, "masses, torque limits, friction and gravity"},
                  {"contacts", "kg.Contacts", true, "which contact vertices touch at each frame"},
                  {"torques", "kg.PathTorques", true, "the torque coefficients per frame (retime.dynamics)"}},
