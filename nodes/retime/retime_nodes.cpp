@@ -1,5 +1,6 @@
 // retime.dynamics, retime.hulls and retime.retime: thin adapters over dynamics.hpp, hulls.hpp,
-// retime_clip.hpp and playback.hpp.
+// retime_clip.hpp and playback.hpp; and the sinks retime.write_curves and retime.write_forces,
+// which write what the retiming found (the solver itself writes no file: DESIGN.md 13).
 // A solve that misses its hulls is reported (figures, log), and fails the node only with `strict`.
 #include <chrono>
 #include <cmath>
@@ -277,9 +278,6 @@ class RetimeNode final : public graph::Node {
       : duration_scale_(p.get<double>("duration_scale")),
         duration_(p.get<double>("duration")),
         fps_(p.get<double>("fps")),
-        curves_(p.get<std::string>("curves")),
-        forces_(p.get<std::string>("forces")),
-        report_(p.get<std::string>("report")),
         strict_(p.get<bool>("strict")) {
     const std::vector<double> sources = p.get<std::vector<double>>("pin_source");
     const std::vector<double> outputs = p.get<std::vector<double>>("pin_output");
@@ -346,53 +344,44 @@ class RetimeNode final : public graph::Node {
     const bool failed = r.warp.controls.empty() || (strict_ && !r.feasible);
     const double fps = fps_ > 0 ? fps_ : motion.fps;
     const int frames = failed ? 0 : output_frame_count(r.warp, fps);  // refuses a count too large first
-    if (!report_.empty())
-      kg::write_file_atomically(report_, [&](std::ostream& os) {
-        kg::JsonWriter w(os);
-        w.begin_object();
-        w.field("clip", motion.name);
-        w.field("objective", to_string(options.target));
-        w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
-        w.field("source_duration", motion.duration());
-        w.field("duration", r.warp.duration);
-        w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
-        w.field("iterations", r.solve.iterations);
-        w.field("solve_seconds", ctx.reproducible() ? std::optional<double>() : r.solve.seconds);
-        w.field("objective_feasibility", r.feasibility);
-        w.field("objective_torque", r.torque);
-        w.field("torque_scale_nm", r.torque_scale);
-        w.field("share_inside", r.share_inside);
-        w.field("share_at_point", r.share_at_point);
-        w.field("fps", fps);
-        w.field("output_frames", frames);  // as written
-        w.field("frames_feasible", hulls.count(HullStatus::Feasible));
-        w.field("frames_flight", hulls.count(HullStatus::Flight));
-        w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
-        if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
-        w.field("feasible", r.feasible);
-        w.field("failed", failed);
-        w.field("message", r.message);
-        w.end_object();
-        os << '\n';
-      });
+    Report report;
+    {
+      kg::JsonWriter w(report);
+      w.begin_object();
+      w.field("clip", motion.name);
+      w.field("objective", to_string(options.target));
+      w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
+      w.field("source_duration", motion.duration());
+      w.field("duration", r.warp.duration);
+      w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
+      w.field("iterations", r.solve.iterations);
+      w.field("solve_seconds", ctx.reproducible() ? std::optional<double>() : r.solve.seconds);
+      w.field("objective_feasibility", r.feasibility);
+      w.field("objective_torque", r.torque);
+      w.field("torque_scale_nm", r.torque_scale);
+      w.field("share_inside", r.share_inside);
+      w.field("share_at_point", r.share_at_point);
+      w.field("fps", fps);
+      w.field("output_frames", frames);  // as played out
+      w.field("frames_feasible", hulls.count(HullStatus::Feasible));
+      w.field("frames_flight", hulls.count(HullStatus::Flight));
+      w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
+      if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
+      w.field("feasible", r.feasible);
+      w.field("failed", failed);
+      w.field("message", r.message);
+      w.end_object();
+    }
+    // Kept on failure: the sink writes why (io.write_report).
+    ctx.output("report", std::move(report));
     if (failed) throw std::runtime_error(r.message);
 
-    if (!curves_.empty()) {
-      const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
-      kg::write_file_atomically(curves_, [&](std::ostream& os) {
-        json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
-      });
-    }
-    if (!forces_.empty())
-      kg::write_file_atomically(
-          forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
     ctx.output("warp", r.warp);
     ctx.output("motion", retimed_motion(motion, r.warp, fps));
   }
 
  private:
   double duration_scale_, duration_, fps_;
-  std::string curves_, forces_, report_;
   bool strict_;
   ClipRetimeOptions options_;
 };
@@ -400,21 +389,29 @@ class RetimeNode final : public graph::Node {
 NodeType retime_node_type() {
   NodeSpec spec{
       .type = "retime.retime",
-      .version = 1,
+      .version = 2,
       .doc = "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic spline, "
              "that minimises α·(distance to each frame's hull)² + β·|τ − τ'|² over the output (eq. 14, baked per "
              "frame and sector), with the ends kept, the duration given and any pins (source moments at output "
              "times) met exactly, by L-BFGS; τ' keeps the look (match), least effort (minimal) or another clip's "
              "(reference). mode time_optimal finds the shortest playback within the hulls instead. The result "
              "reports the share of output frames inside their hulls and, when the duration asks the impossible, "
-             "the shortest feasible one.",
+             "the shortest feasible one. Files are written by sinks: io.write_report (the report), "
+             "retime.write_curves (p(t)), retime.write_forces (per-frame forces).",
       .inputs = {{"motion", "kg.Motion", true, "the source clip (the one the hulls were built for)"},
                  {"hulls", "kg.Hulls", true, "per-frame hulls and force model (retime.hulls)"},
                  {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (retime.hulls)"},
                  {"reference_hulls", "kg.Hulls", false, "objective reference: the other clip's hulls"},
                  {"reference_torques", "kg.PathTorques", false, "objective reference: the other clip's torques"}},
       .outputs = {{"motion", "kg.Motion", true, "the retimed clip at `fps`"},
-                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"}},
+                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"},
+                  {.name = "report",
+                   .type = "kg.Report",
+                   .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
+                          "at `fps`, solve_seconds (null with --reproducible); set also when the node fails "
+                          "(failed: true, feasible, shortest_duration) and then still delivered, for "
+                          "io.write_report to say why",
+                   .kept_on_failure = true}},
       .params = {
           {.name = "duration_scale",
            .type = ParamType::Float,
@@ -485,26 +482,92 @@ NodeType retime_node_type() {
            .doc = "frame rate of the retimed clip; 0: the source's",
            .min = 0.0,
            .max = 1e5},
-          {.name = "curves",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "p(t), ṗ(t), p̈(t) per output frame: .csv, or .json; \"\" writes none"},
-          {.name = "forces",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "per source frame: hull, timing played, contact forces and torques (JSON); \"\" writes none"},
-          {.name = "report",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
-                  "at `fps` (JSON); written also when the node fails (failed: true, feasible, "
-                  "shortest_duration); \"\" writes none"},
           {.name = "strict",
            .type = ParamType::Bool,
            .default_value = false,
-           .doc = "fail (non-zero exit, no motion, curves or forces; the report only, saying why) when "
+           .doc = "fail (non-zero exit, no motion or warp; the report only, saying why) when "
                   "an output frame lies outside its hull"}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<RetimeNode>(p); }};
+}
+
+// A sink's `path` param: where it writes; "" writes nothing (a graph variable left empty).
+ParamSpec sink_path_param(const std::string& doc) {
+  return {.name = "path", .type = ParamType::OutputPath, .default_value = std::string(), .doc = doc};
+}
+
+// Writes `write`'s text to the node's path atomically; with no path, says that nothing was written.
+void write_sink_file(RunContext& ctx, const std::string& path, const std::function<void(std::ostream&)>& write) {
+  if (path.empty()) {
+    ctx.log("no path: nothing written");
+    ctx.report("written", false);
+    return;
+  }
+  kg::write_file_atomically(path, write);
+  ctx.report("written", true);
+}
+
+class WriteCurvesNode final : public graph::Node {
+ public:
+  explicit WriteCurvesNode(const Params& p) : path_(p.get<std::string>("path")) {}
+
+  void run(RunContext& ctx) const override {
+    const TimeWarp& warp = ctx.input<TimeWarp>("warp");
+    const double fps = ctx.input<motion::Motion>("motion").fps;
+    const bool json = path_.size() >= 5 && path_.substr(path_.size() - 5) == ".json";
+    write_sink_file(ctx, path_, [&](std::ostream& os) {
+      json ? write_warp_json(os, warp, fps) : write_warp_csv(os, warp, fps);
+    });
+  }
+
+ private:
+  std::string path_;
+};
+
+NodeType write_curves_node_type() {
+  NodeSpec spec{
+      .type = "retime.write_curves",
+      .version = 1,
+      .doc = "Writes a retiming's p(t), ṗ(t) and p̈(t) at each output frame of the retimed clip: CSV (t, p, pdot, "
+             "pddot), or JSON when the path ends in .json (the warp's controls too).",
+      .inputs = {{"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"},
+                 {"motion", "kg.Motion", true, "the retimed clip (retime.retime): its frame rate sets the frames"}},
+      .params = {sink_path_param("the .csv or .json file; \"\" writes none")},
+      .side_effects = true};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<WriteCurvesNode>(p); }};
+}
+
+class WriteForcesNode final : public graph::Node {
+ public:
+  explicit WriteForcesNode(const Params& p) : path_(p.get<std::string>("path")) {}
+
+  void run(RunContext& ctx) const override {
+    const Hulls& hulls = ctx.input<Hulls>("hulls");
+    const PathTorques& torques = ctx.input<PathTorques>("torques");
+    const TimeWarp& warp = ctx.input<TimeWarp>("warp");
+    if (static_cast<int>(hulls.frames.size()) != torques.frame_count())
+      throw std::invalid_argument("the hulls have " + std::to_string(hulls.frames.size()) + " frames and the torques " +
+                                  std::to_string(torques.frame_count()) + " (expected the same clip)");
+    write_sink_file(ctx, path_, [&](std::ostream& os) {
+      write_forces_json(os, hulls, torques.frames, warp, torques.fps);
+    });
+  }
+
+ private:
+  std::string path_;
+};
+
+NodeType write_forces_node_type() {
+  NodeSpec spec{
+      .type = "retime.write_forces",
+      .version = 1,
+      .doc = "Writes, per source frame of a retiming, the hull, the timing (p̈, ṗ²) the warp plays it at and whether "
+             "that lies inside, the contact forces per patch there and the generalised forces (JSON).",
+      .inputs = {{"hulls", "kg.Hulls", true, "the hulls the retiming used (retime.hulls)"},
+                 {"torques", "kg.PathTorques", true, "the coefficients they were built with (retime.hulls)"},
+                 {"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"}},
+      .params = {sink_path_param("the JSON file; \"\" writes none")},
+      .side_effects = true};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<WriteForcesNode>(p); }};
 }
 
 }  // namespace
@@ -518,6 +581,8 @@ std::vector<graph::NodeType> retime_node_types() {
   out.push_back(retime::torque_limits_node_type());
   out.push_back(retime::hulls_node_type());
   out.push_back(retime::retime_node_type());
+  out.push_back(retime::write_curves_node_type());
+  out.push_back(retime::write_forces_node_type());
   return out;
 }
 
