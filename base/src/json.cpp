@@ -3,6 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <sstream>
 #include <stdexcept>
 
 #include "kg/base/text.hpp"
@@ -60,6 +61,24 @@ void print(std::string& out, const Json& j, int indent, int depth) {
 
 }  // namespace
 
+struct Report::Document {
+  Json root;
+};
+
+void Report::write(std::ostream& os, int indent) const {
+  if (!doc_) return;
+  std::string text;
+  print(text, doc_->root, indent, 0);
+  if (doc_->root.is_structured() && indent > 0) text += '\n';
+  os << text;
+}
+
+std::string Report::text(int indent) const {
+  std::ostringstream os;
+  write(os, indent);
+  return os.str();
+}
+
 struct JsonWriter::Document {
   Json root;
   std::vector<Json*> open;         // containers begun and not yet ended, outermost first
@@ -86,31 +105,40 @@ struct JsonWriter::Document {
 
   void begin(Json container) { open.push_back(&add(std::move(container))); }
 
-  void end(bool object, std::ostream& os, int indent) {
+  void end(bool object, std::ostream* os, Report* report, int indent) {
     if (open.empty() || open.back()->is_object() != object || key)
       throw std::logic_error(object ? "JsonWriter: end_object without its begin_object"
                                     : "JsonWriter: end_array without its begin_array");
     open.pop_back();
-    if (open.empty()) write(os, indent);
+    if (open.empty()) finish(os, report, indent);
   }
 
-  void scalar(Json value, std::ostream& os, int indent) {
+  void scalar(Json value, std::ostream* os, Report* report, int indent) {
     add(std::move(value));
-    if (open.empty()) write(os, indent);
+    if (open.empty()) finish(os, report, indent);
   }
 
-  // The finished document; a container at the top ends its line when pretty-printed.
-  void write(std::ostream& os, int indent) {
-    std::string text;
-    print(text, root, indent, 0);
-    if (root.is_structured() && indent > 0) text += '\n';
-    os << text;
+  // The finished document: into the report, or its text to the stream (a container at the top
+  // ends its line when pretty-printed).
+  void finish(std::ostream* os, Report* report, int indent) {
+    if (report) {
+      auto doc = std::make_shared<Report::Document>();
+      doc->root = std::move(root);
+      report->doc_ = std::move(doc);
+    } else {
+      std::string text;
+      print(text, root, indent, 0);
+      if (root.is_structured() && indent > 0) text += '\n';
+      *os << text;
+    }
     root = nullptr;
   }
 };
 
 JsonWriter::JsonWriter(std::ostream& os, int indent)
-    : os_(os), indent_(indent), doc_(std::make_unique<Document>()) {}
+    : os_(&os), indent_(indent), doc_(std::make_unique<Document>()) {}
+
+JsonWriter::JsonWriter(Report& into) : report_(&into), doc_(std::make_unique<Document>()) {}
 
 JsonWriter::~JsonWriter() = default;
 
@@ -119,7 +147,7 @@ void JsonWriter::begin_object() {
 }
 
 void JsonWriter::end_object() {
-  doc_->end(true, os_, indent_);
+  doc_->end(true, os_, report_, indent_);
 }
 
 void JsonWriter::begin_array() {
@@ -127,7 +155,7 @@ void JsonWriter::begin_array() {
 }
 
 void JsonWriter::end_array() {
-  doc_->end(false, os_, indent_);
+  doc_->end(false, os_, report_, indent_);
 }
 
 void JsonWriter::key(std::string_view name) {
@@ -137,27 +165,27 @@ void JsonWriter::key(std::string_view name) {
 }
 
 void JsonWriter::value(std::string_view text) {
-  doc_->scalar(Json(std::string(text)), os_, indent_);
+  doc_->scalar(Json(std::string(text)), os_, report_, indent_);
 }
 
 void JsonWriter::value(double number) {
-  doc_->scalar(Json(number), os_, indent_);
+  doc_->scalar(Json(number), os_, report_, indent_);
 }
 
 void JsonWriter::value(std::int64_t number) {
-  doc_->scalar(Json(number), os_, indent_);
+  doc_->scalar(Json(number), os_, report_, indent_);
 }
 
 void JsonWriter::value(bool flag) {
-  doc_->scalar(Json(flag), os_, indent_);
+  doc_->scalar(Json(flag), os_, report_, indent_);
 }
 
 void JsonWriter::value(const std::vector<double>& numbers) {
-  doc_->scalar(Json(numbers), os_, indent_);
+  doc_->scalar(Json(numbers), os_, report_, indent_);
 }
 
 void JsonWriter::null() {
-  doc_->scalar(Json(nullptr), os_, indent_);
+  doc_->scalar(Json(nullptr), os_, report_, indent_);
 }
 
 std::string json_quote(std::string_view text) {

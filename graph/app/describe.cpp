@@ -50,6 +50,7 @@ void print_ports(std::ostream& os, const char* title, const std::vector<PortSpec
   for (const PortSpec& port : ports) {
     os << "    " << port.name << ": " << port.type;
     if (inputs && !port.required) os << " (optional)";
+    if (!inputs && port.kept_on_failure) os << " (kept on failure)";
     os << '\n';
     if (!port.doc.empty()) write_wrapped(os, port.doc, "        ");
   }
@@ -63,6 +64,7 @@ void json_ports(JsonWriter& w, const char* key, const std::vector<PortSpec>& por
     w.field("name", port.name);
     w.field("type", port.type);
     if (inputs) w.field("required", port.required);
+    if (!inputs) w.field("kept_on_failure", port.kept_on_failure);
     w.field("doc", port.doc);
     w.end_object();
   }
@@ -106,7 +108,8 @@ void print_nodes_text(std::ostream& os, const graph::Registry& registry) {
     const graph::NodeSpec& spec = type->spec;
     if (!first) os << '\n';
     first = false;
-    os << spec.type << "  (version " << spec.version << ", " << registry.node_origin(name) << ")\n";
+    os << spec.type << "  (version " << spec.version << ", " << registry.node_origin(name)
+       << (spec.has_side_effects() ? ", side effects" : "") << ")\n";
     if (!spec.doc.empty()) write_wrapped(os, spec.doc, "  ");
     print_ports(os, "inputs", spec.inputs, true);
     print_ports(os, "outputs", spec.outputs, false);
@@ -161,6 +164,7 @@ void print_nodes_json(std::ostream& os, const graph::Registry& registry,
     w.field("version", spec.version);
     w.field("doc", spec.doc);
     w.field("origin", registry.node_origin(name));
+    w.field("side_effects", spec.has_side_effects());
     json_ports(w, "inputs", spec.inputs, true);
     json_ports(w, "outputs", spec.outputs, false);
     w.key("params");

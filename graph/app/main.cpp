@@ -33,6 +33,7 @@ int run(Host& host, const Options& o) {
   graph::RunOptions options;
   options.jobs = o.jobs;
   options.reproducible = o.reproducible;
+  options.keep_outputs = false;  // the sinks have written the files: free each value after its last consumer
   options.on_log = [&log_mutex](const std::string& node, const std::string& message) {
     std::lock_guard lock(log_mutex);
     std::cerr << node << ": " << message << '\n';

@@ -5,11 +5,13 @@
 #include <exception>
 #include <iostream>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <thread>
 
 #include "kg/base/atomic_file.hpp"
 #include "kg/base/json.hpp"
+#include "kg/graph/sha256.hpp"
 
 namespace kg::graph {
 
@@ -119,6 +121,21 @@ struct Input {
   std::string from_port;
 };
 
+// The node's key: SHA-256 of its type, the type's version, its params (canonical text, by name)
+// and, per input port, the key of its producer and that producer's output port. Producers' keys
+// must be known (topological order). Two nodes with the same key compute the same thing.
+std::string node_key(const NodeInstance& node, const NodeType* type, const std::vector<Input>& inputs,
+                     const std::vector<std::string>& keys) {
+  std::string text = "kg.node-key 1\ntype " + node.type + "\nversion " +
+                     (type ? std::to_string(type->spec.version) : std::string("?")) + "\n";
+  for (const auto& [name, value] : node.params.all()) text += "param " + name + " = " + to_string(value) + "\n";
+  std::vector<std::string> wired;
+  for (const Input& in : inputs) wired.push_back("input " + in.port + " <- " + keys[in.from] + "." + in.from_port + "\n");
+  std::sort(wired.begin(), wired.end());
+  for (const std::string& line : wired) text += line;
+  return sha256_hex(text);
+}
+
 }  // namespace
 
 RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options) {
@@ -129,14 +146,56 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
   std::vector<std::vector<Input>> inputs(n);
   std::vector<std::size_t> pending(n, 0);
   const std::vector<std::pair<std::size_t, std::size_t>> ends = graph.connection_ends();
+  // Per node and output port: how many consumers have still to take the value (connections, and
+  // nodes taking all of this node's results), so that it can be freed after the last.
+  std::vector<std::map<std::string, std::size_t>> consumers(n);
   for (std::size_t k = 0; k < ends.size(); ++k) {
     const auto [from, to] = ends[k];
     const Connection& c = graph.connections[k];
     downstream[from].push_back(to);
     inputs[to].push_back({c.to.port, from, c.from.port});
+    ++consumers[from][c.from.port];
     ++pending[to];
   }
-  graph.topological_order();  // throws for a cycle, which would otherwise never finish
+  // Throws for a cycle, which would otherwise never finish.
+  const std::vector<std::size_t> order = graph.topological_order();
+
+  RunResult result;
+  result.nodes.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    result.nodes[i].id = graph.nodes[i].id;
+    result.nodes[i].type = graph.nodes[i].type;
+  }
+
+  // Keys in topological order; the first node (in that order) of each key computes, the others
+  // with that key wait for it (an extra dependency) and take its results.
+  std::vector<std::string> keys(n);
+  std::vector<std::size_t> first_of(n);
+  std::vector<std::vector<std::size_t>> duplicates(n);
+  {
+    std::map<std::string, std::size_t> first_with_key;
+    for (std::size_t i : order) {
+      const NodeType* type = registry.find_node(graph.nodes[i].type);
+      keys[i] = node_key(graph.nodes[i], type, inputs[i], keys);
+      result.nodes[i].key = keys[i];
+      first_of[i] = i;
+      if (type && type->spec.has_side_effects()) continue;
+      auto [it, fresh] = first_with_key.emplace(keys[i], i);
+      if (fresh) continue;
+      // Not upstream of i: a node's key covers its producers' keys, so an upstream node has
+      // another key. The edge can make no cycle.
+      first_of[i] = it->second;
+      duplicates[it->second].push_back(i);
+      downstream[it->second].push_back(i);
+      ++pending[i];
+    }
+    for (std::size_t i = 0; i < n; ++i)
+      if (!duplicates[i].empty()) {
+        const NodeType* type = registry.find_node(graph.nodes[i].type);
+        if (type)
+          for (const PortSpec& out : type->spec.outputs) consumers[i][out.name] += duplicates[i].size();
+      }
+  }
 
   std::mutex log_mutex;
   const LogFn log = [&](const std::string& id, const std::string& message) {
@@ -155,12 +214,6 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
     }
   };
 
-  RunResult result;
-  result.nodes.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    result.nodes[i].id = graph.nodes[i].id;
-    result.nodes[i].type = graph.nodes[i].type;
-  }
   std::vector<std::map<std::string, Value>> produced(n);
   std::vector<std::vector<std::string>> failed_upstream(n);  // the failed nodes that make a node skip
 
@@ -171,7 +224,23 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
   for (std::size_t i = 0; i < n; ++i)
     if (pending[i] == 0) ready.insert(i);
 
-  // Runs node i outside the lock. Only this worker touches result.nodes[i] meanwhile.
+  // Under the lock: one consumer of node i's output `port` is done with it; the last frees it.
+  auto consumed = [&](std::size_t i, const std::string& port) {
+    auto it = consumers[i].find(port);
+    if (it == consumers[i].end() || it->second == 0) return;
+    if (--it->second == 0 && !options.keep_outputs) produced[i].erase(port);
+  };
+  // Under the lock, once node i has finished: outputs no one consumes are freed at once.
+  auto drop_unconsumed = [&](std::size_t i) {
+    if (options.keep_outputs) return;
+    for (auto it = produced[i].begin(); it != produced[i].end();) {
+      auto c = consumers[i].find(it->first);
+      it = (c == consumers[i].end() || c->second == 0) ? produced[i].erase(it) : std::next(it);
+    }
+  };
+
+  // Runs node i outside the lock. Only this worker touches result.nodes[i] and produced[i]
+  // meanwhile.
   auto execute = [&](std::size_t i, std::map<std::string, Value> values) {
     const NodeInstance& inst = graph.nodes[i];
     NodeRun& run = result.nodes[i];
@@ -182,13 +251,14 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
       return;
     }
     const auto start = Clock::now();
+    std::optional<Context> ctx;
     try {
       NodePtr node = inst.node ? inst.node : registry.create_node(inst.type, inst.params);
-      Context ctx(inst, type->spec, std::move(values), registry.node_owner(inst.type), log, registry,
+      ctx.emplace(inst, type->spec, std::move(values), registry.node_owner(inst.type), log, registry,
                   options.reproducible);
-      node->run(ctx);
-      produced[i] = std::move(ctx.outputs());
-      run.figures = std::move(ctx.figures());
+      node->run(*ctx);
+      produced[i] = std::move(ctx->outputs());
+      run.figures = std::move(ctx->figures());
       run.status = NodeStatus::Ok;
     } catch (const std::exception& e) {
       run.status = NodeStatus::Failed;
@@ -197,6 +267,14 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
       run.status = NodeStatus::Failed;
       run.message = "unknown exception (not derived from std::exception)";
     }
+    if (run.status == NodeStatus::Failed && ctx) {
+      // The outputs its spec keeps on failure (a report saying why).
+      for (auto& [port, value] : ctx->outputs()) {
+        const PortSpec* out = type->spec.find_output(port);
+        if (out && out->kept_on_failure) produced[i][port] = std::move(value);
+      }
+    }
+    ctx.reset();  // the inputs go before the time is taken
     run.wall_seconds = seconds_since(start);
   };
 
@@ -215,17 +293,21 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
       std::string missing;
       for (const Input& in : inputs[i]) {
         const NodeRun& up = result.nodes[in.from];
-        if (up.status == NodeStatus::Failed) {
+        auto it = produced[in.from].find(in.from_port);
+        const bool delivered = it != produced[in.from].end();
+        if (up.status == NodeStatus::Failed && !delivered) {  // a failed node's report is delivered
           causes.push_back(up.id);
         } else if (up.status == NodeStatus::Skipped) {
           causes.insert(causes.end(), failed_upstream[in.from].begin(), failed_upstream[in.from].end());
-        } else if (auto it = produced[in.from].find(in.from_port); it != produced[in.from].end()) {
+        } else if (delivered) {
           values[in.port] = it->second;
         } else if (missing.empty()) {
           missing = "input " + graph.nodes[i].id + "." + in.port + " not produced by " + up.id + "." +
                     in.from_port + " (node '" + up.id + "' ran but did not set that output)";
         }
+        consumed(in.from, in.from_port);
       }
+      const std::size_t first = first_of[i];
       if (!causes.empty()) {
         std::vector<std::string> unique;
         for (const std::string& c : causes)
@@ -241,12 +323,31 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
         lock.unlock();
         log(run.id, "failed: " + missing);
         lock.lock();
+      } else if (first != i && result.nodes[first].status != NodeStatus::Skipped) {
+        // The same type, params and inputs as `first`, which has finished: its results.
+        values.clear();
+        const NodeRun& same = result.nodes[first];
+        run.status = same.status;
+        run.message = same.message;
+        run.figures = same.figures;
+        run.same_as = same.id;
+        for (const auto& [port, value] : produced[first]) produced[i][port] = value;
+        if (const NodeType* type = registry.find_node(graph.nodes[first].type))
+          for (const PortSpec& out : type->spec.outputs) consumed(first, out.name);
+        lock.unlock();
+        log(run.id, "same_as: " + same.id + " (the same type, params and inputs: its results, not run again)");
+        if (run.status == NodeStatus::Failed) log(run.id, "failed: " + run.message);
+        lock.lock();
       } else {
         lock.unlock();
         execute(i, std::move(values));
         if (run.status == NodeStatus::Failed) log(run.id, "failed: " + run.message);
         lock.lock();
       }
+      if (first != i && run.same_as.empty())  // skipped, or ran itself: `first` keeps nothing for it
+        if (const NodeType* type = registry.find_node(graph.nodes[first].type))
+          for (const PortSpec& out : type->spec.outputs) consumed(first, out.name);
+      drop_unconsumed(i);
       ++finished;
       for (std::size_t j : downstream[i])
         if (--pending[j] == 0) ready.insert(j);
@@ -269,7 +370,7 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
 
   for (std::size_t i = 0; i < n; ++i) {
     if (result.nodes[i].status != NodeStatus::Ok) result.ok = false;
-    if (result.nodes[i].status == NodeStatus::Skipped) continue;
+    if (result.nodes[i].status == NodeStatus::Skipped || !options.keep_outputs) continue;
     for (auto& [port, value] : produced[i]) result.outputs[graph.nodes[i].id + "." + port] = std::move(value);
   }
   result.wall_seconds = seconds_since(t0);
@@ -295,6 +396,7 @@ void write_report_json(const std::filesystem::path& file, const Graph& graph, co
       w.field("type", run.type);
       w.field("status", to_string(run.status));
       w.field("message", run.message);
+      w.field("same_as", run.same_as);
       w.field("wall_seconds", run.wall_seconds);
       w.key("figures");
       w.begin_object();

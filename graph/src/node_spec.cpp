@@ -19,6 +19,13 @@ const PortSpec* NodeSpec::find_input(const std::string& name) const {
 const PortSpec* NodeSpec::find_output(const std::string& name) const {
   return find_named(outputs, name);
 }
+bool NodeSpec::has_side_effects() const {
+  if (side_effects) return true;
+  for (const ParamSpec& p : params)
+    if (p.type == ParamType::OutputPath) return true;
+  return false;
+}
+
 const ParamSpec* NodeSpec::find_param(const std::string& name) const {
   return find_named(params, name);
 }

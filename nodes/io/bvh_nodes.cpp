@@ -113,6 +113,7 @@ graph::NodeSpec export_spec(std::string type, std::string doc, std::string path_
                   .doc = "digits after the decimal point (trailing zeros dropped)",
                   .min = 1,
                   .max = 12}},
+      .side_effects = true,
   };
 }
 

@@ -365,8 +365,9 @@ void write_band(kg::JsonWriter& w, const BandEnergy& b) {
 }
 }  // namespace
 
-void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
-  kg::JsonWriter w(os);
+Report metrics_report(const RetargetMetrics& m) {
+  Report report;
+  kg::JsonWriter w(report);
   w.begin_object();
   w.field("version", 1);
   w.field("motion", m.motion_name);
@@ -456,6 +457,11 @@ void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
   }
   w.field("solve_seconds", m.solve_seconds);
   w.end_object();
+  return report;
+}
+
+void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
+  metrics_report(m).write(os);
   os << '\n';
 }
 

@@ -1,11 +1,10 @@
-// retarget.metrics: a thin adapter over compute_metrics and write_metrics_json (metrics.hpp).
+// retarget.metrics: a thin adapter over compute_metrics and metrics_report (metrics.hpp). It
+// outputs the JSON document as a kg.Report; io.write_report writes it (DESIGN.md 13).
 #include <cstdint>
 #include <memory>
-#include <sstream>
 
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/nodes.hpp"
-#include "kg/base/atomic_file.hpp"
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
@@ -18,8 +17,7 @@ using graph::ParamType;
 class MetricsNode final : public graph::Node {
  public:
   explicit MetricsNode(const graph::Params& p)
-      : path_(p.get<std::string>("path")),
-        key_spacing_(static_cast<int>(p.get<std::int64_t>("key_spacing"))),
+      : key_spacing_(static_cast<int>(p.get<std::int64_t>("key_spacing"))),
         tolerance_(p.get<double>("tolerance_mm") / 1000.0) {}
 
   void run(graph::RunContext& ctx) const override {
@@ -64,20 +62,16 @@ class MetricsNode final : public graph::Node {
     }
     if (m.solve_seconds) ctx.report("solve_seconds", *m.solve_seconds);
 
-    std::ostringstream text;
     if (ctx.reproducible()) {
       RetargetMetrics timeless = m;
       timeless.solve_seconds.reset();
-      write_metrics_json(text, timeless);
+      ctx.output("report", metrics_report(timeless));
     } else {
-      write_metrics_json(text, m);
+      ctx.output("report", metrics_report(m));
     }
-    if (!path_.empty()) kg::write_file_atomically(path_, [&](std::ostream& os) { os << text.str(); });
-    ctx.output("json", text.str());
   }
 
  private:
-  std::string path_;
   int key_spacing_;
   double tolerance_;
 };
@@ -85,9 +79,10 @@ class MetricsNode final : public graph::Node {
 graph::NodeType metrics_node_type() {
   graph::NodeSpec spec{
       .type = "retarget.metrics",
-      .version = 1,
+      .version = 2,
       .doc =
-          "Measures a retargeted motion (one character) and writes them as JSON: worst and mean "
+          "Measures a retargeted motion (one character) and outputs them as a JSON report (written by "
+          "io.write_report): worst and mean "
           "violation per constraint kind (cm for point kinds), foot skate (greatest horizontal "
           "travel of each planted point of position/same_place constraints during its run of "
           "frames, cm), RMS jerk of position (m/s^3) and rotation (rad/s^3) channels, of the "
@@ -102,12 +97,9 @@ graph::NodeType metrics_node_type() {
                  {"target", "kg.Target", false, "the target character: a morphing one gives each frame its skeleton"},
                  {"keys", "kg.KeySpacing", false, "the key spacing of the solve (else key_spacing)"},
                  {"solve_seconds", "kg.Scalar", false, "the solver's time, s, passed through"}},
-      .outputs = {{"json", "kg.String", true, "the JSON document also written to path"}},
-      .params = {{.name = "path",
-                  .type = ParamType::OutputPath,
-                  .default_value = std::string(),
-                  .doc = "where the JSON goes (written atomically); \"\" writes no file"},
-                 {.name = "key_spacing",
+      .outputs = {{"report", "kg.Report", true,
+                   "the JSON document (version 1; solve_seconds null with --reproducible)"}},
+      .params = {{.name = "key_spacing",
                   .type = ParamType::Int,
                   .default_value = std::int64_t{4},
                   .doc = "frames per key for the energy cut-off when `keys` is not wired",

@@ -1,12 +1,10 @@
 // retime.dynamics, retime.hulls and retime.retime: thin adapters over dynamics.hpp, hulls.hpp,
-// retime_clip.hpp and playback.hpp.
+// retime_clip.hpp and playback.hpp; and the sinks retime.write_curves and retime.write_forces,
+// which write what the retiming found (the solver itself writes no file: DESIGN.md 13).
 // A solve that misses its hulls is reported (figures, log), and fails the node only with `strict`.
 #include <chrono>
 #include <cmath>
 #include <functional>
-#include <future>
-#include <list>
-#include <mutex>
 #include <sstream>
 #include <stdexcept>
 
@@ -168,99 +166,6 @@ NodeType torque_limits_node_type() {
   return {std::move(spec), [](const Params& p) { return std::make_unique<TorqueLimitsNode>(p); }};
 }
 
-// Hulls shared by the retime.hulls nodes of a run that build the same thing: the same input
-// objects (the same upstream outputs, not equal copies) and the same gravity, mass scale and
-// options once the body's defaults are applied. graphs/retime.yaml's `reference` (the unedited
-// body) and `hulls` (gravity and mass_scale from its variables) are such a pair when nothing is
-// edited; the hulls are the costliest step of the pipeline. A node arriving while another builds
-// waits for it. Entries name their inputs and results weakly: they match only while those objects
-// live (so an address cannot be reused by another object meanwhile), and are dropped at the next
-// lookup once they are gone.
-struct HullsKey {
-  const void* body = nullptr;
-  const void* contacts = nullptr;
-  const void* torques = nullptr;
-  Eigen::Vector3d gravity = Eigen::Vector3d::Zero();
-  double mass_scale = 1;
-  HullOptions options{};
-
-  bool operator==(const HullsKey& o) const {
-    return body == o.body && contacts == o.contacts && torques == o.torques && gravity == o.gravity &&
-           mass_scale == o.mass_scale && options.pddot_max == o.options.pddot_max &&
-           options.pdot2_max == o.options.pdot2_max && options.tolerance == o.options.tolerance &&
-           options.initial_directions == o.options.initial_directions && options.max_lps == o.options.max_lps;
-  }
-};
-
-struct BuiltHulls {
-  std::weak_ptr<const Hulls> hulls;
-  std::weak_ptr<const PathTorques> torques;
-  double seconds = 0;  // the build's wall time
-};
-
-class HullsMemo {
- public:
-  // The hulls for `key`: built by `build` (returning strong references, which the caller keeps
-  // alive by outputting them), or shared from a node that built or is building them. `shared` says
-  // which. A build that throws throws in every node waiting for it.
-  struct Result {
-    std::shared_ptr<const Hulls> hulls;
-    std::shared_ptr<const PathTorques> torques;
-    double seconds = 0;
-    bool shared = false;
-  };
-  Result get(const HullsKey& key, std::vector<std::weak_ptr<const void>> inputs,
-             const std::function<Result()>& build) {
-    std::shared_future<BuiltHulls> pending;
-    std::promise<BuiltHulls> mine;
-    {
-      std::lock_guard<std::mutex> lock(mutex_);
-      entries_.remove_if([](const Entry& e) { return e.expired(); });
-      for (const Entry& e : entries_)
-        if (e.key == key) pending = e.result;
-      if (!pending.valid()) entries_.push_back({key, std::move(inputs), mine.get_future().share()});
-    }
-    if (pending.valid()) {
-      const BuiltHulls built = pending.get();  // rethrows the builder's failure
-      Result r{built.hulls.lock(), built.torques.lock(), built.seconds, true};
-      if (r.hulls && r.torques) return r;
-      return build();  // released already (another run's): build again
-    }
-    try {
-      Result r = build();
-      mine.set_value({r.hulls, r.torques, r.seconds});
-      return r;
-    } catch (...) {
-      mine.set_exception(std::current_exception());
-      throw;
-    }
-  }
-
- private:
-  struct Entry {
-    HullsKey key;
-    std::vector<std::weak_ptr<const void>> inputs;
-    std::shared_future<BuiltHulls> result;
-    bool expired() const {
-      for (const auto& input : inputs)
-        if (input.expired()) return true;
-      if (result.wait_for(std::chrono::seconds(0)) != std::future_status::ready) return false;
-      try {
-        return result.get().hulls.expired();
-      } catch (...) {
-        return true;  // a failed build: the next node tries again
-      }
-    }
-  };
-  std::mutex mutex_;
-  std::list<Entry> entries_;
-};
-
-HullsMemo& hulls_memo() {
-  static HullsMemo memo;
-  return memo;
-}
-
 class HullsNode final : public graph::Node {
  public:
   explicit HullsNode(const Params& p)
@@ -272,12 +177,9 @@ class HullsNode final : public graph::Node {
   }
 
   void run(RunContext& ctx) const override {
-    const auto body_in = ctx.input_value("body").get_shared<body::BodyModel>();
-    const auto contacts_in = ctx.input_value("contacts").get_shared<Contacts>();
-    const auto source_in = ctx.input_value("torques").get_shared<PathTorques>();
-    body::BodyModel body = *body_in;
-    const Contacts& contacts = *contacts_in;
-    const PathTorques& source = *source_in;
+    body::BodyModel body = ctx.input<body::BodyModel>("body");
+    const Contacts& contacts = ctx.input<Contacts>("contacts");
+    const PathTorques& source = ctx.input<PathTorques>("torques");
     if (contacts.frame_count() != source.frame_count())
       throw std::invalid_argument("the contacts have " + std::to_string(contacts.frame_count()) +
                                   " frames and the torques " + std::to_string(source.frame_count()));
@@ -291,20 +193,13 @@ class HullsNode final : public graph::Node {
           "floor), or give the contacts in a file (path)");
     body.gravity = gravity_from(gravity_, body.gravity);
     if (mass_scale_ != 1) ctx.log("segment " + source.segment + " weighs " + std::to_string(mass_scale_) + " times its mass");
-    const HullsKey key{body_in.get(), contacts_in.get(), source_in.get(), body.gravity, mass_scale_, options_};
-    const HullsMemo::Result built = hulls_memo().get(key, {body_in, contacts_in, source_in}, [&] {
-      // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
-      auto edited = std::make_shared<PathTorques>(PathTorques{source.skeleton, source.fps, {}, "", {}});
-      edited->frames.reserve(source.frames.size());
-      for (int f = 0; f < source.frame_count(); ++f) edited->frames.push_back(source.edited(f, mass_scale_));
-      const auto start = std::chrono::steady_clock::now();
-      auto hulls = std::make_shared<const Hulls>(build_hulls(body, contacts, edited->frames, options_));
-      const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      return HullsMemo::Result{std::move(hulls), std::move(edited), seconds, false};
-    });
-    const Hulls& hulls = *built.hulls;
-    const double seconds = built.seconds;
-    if (built.shared) ctx.log("the same hulls as another retime.hulls node of this run (same inputs and settings): shared");
+    // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
+    PathTorques edited{source.skeleton, source.fps, {}, "", {}};
+    edited.frames.reserve(source.frames.size());
+    for (int f = 0; f < source.frame_count(); ++f) edited.frames.push_back(source.edited(f, mass_scale_));
+    const auto start = std::chrono::steady_clock::now();
+    Hulls hulls = build_hulls(body, contacts, edited.frames, options_);
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     long lps = 0;
     for (const FrameHull& h : hulls.frames) lps += h.lp_count;
     const int frames = static_cast<int>(hulls.frames.size());
@@ -314,14 +209,13 @@ class HullsNode final : public graph::Node {
     ctx.report("infeasible", static_cast<std::int64_t>(hulls.count(HullStatus::Infeasible)));
     ctx.report("lps_per_frame", frames ? static_cast<double>(lps) / frames : 0.0);
     ctx.report("ms_per_frame", frames ? 1000 * seconds / frames : 0.0);
-    ctx.report("shared", built.shared);  // built by another node of the run: ms_per_frame is its
     std::ostringstream log;
     log << frames << " hulls: " << hulls.count(HullStatus::Feasible) << " feasible, "
         << hulls.count(HullStatus::Flight) << " in flight, " << hulls.count(HullStatus::Infeasible)
         << " not exactly physical (closest point); gravity (" << body.gravity.transpose() << ") m/s^2";
     ctx.log(log.str());
-    ctx.set_output("hulls", graph::Value::share(built.hulls));
-    ctx.set_output("torques", graph::Value::share(built.torques));
+    ctx.output("hulls", std::move(hulls));
+    ctx.output("torques", std::move(edited));
   }
 
  private:
@@ -340,8 +234,8 @@ NodeType hulls_node_type() {
              "centre at the original timing (0, 1) of least contact force; the force model's fan (§3.4). Frames "
              "in flight and frames no contact forces can explain get their least-squares point, reported. The "
              "physical edits of §4.2 (`gravity`, a segment's `mass_scale`) change the coefficients, not the "
-             "inverse dynamics. Nodes of one run with the same inputs and settings (graphs/retime.yaml's "
-             "reference and hulls when nothing is edited) build once and share the hulls.",
+             "inverse dynamics. Nodes of one run with the same params and inputs (graphs/retime.yaml's "
+             "reference and hulls when nothing is edited) build once: the executor shares their results.",
       .inputs = {{"body", "kg.BodyModel", true, "masses, torque limits, friction and gravity"},
                  {"contacts", "kg.Contacts", true, "which contact vertices touch at each frame"},
                  {"torques", "kg.PathTorques", true, "the torque coefficients per frame (retime.dynamics)"}},
@@ -384,9 +278,6 @@ class RetimeNode final : public graph::Node {
       : duration_scale_(p.get<double>("duration_scale")),
         duration_(p.get<double>("duration")),
         fps_(p.get<double>("fps")),
-        curves_(p.get<std::string>("curves")),
-        forces_(p.get<std::string>("forces")),
-        report_(p.get<std::string>("report")),
         strict_(p.get<bool>("strict")) {
     const std::vector<double> sources = p.get<std::vector<double>>("pin_source");
     const std::vector<double> outputs = p.get<std::vector<double>>("pin_output");
@@ -453,53 +344,44 @@ class RetimeNode final : public graph::Node {
     const bool failed = r.warp.controls.empty() || (strict_ && !r.feasible);
     const double fps = fps_ > 0 ? fps_ : motion.fps;
     const int frames = failed ? 0 : output_frame_count(r.warp, fps);  // refuses a count too large first
-    if (!report_.empty())
-      kg::write_file_atomically(report_, [&](std::ostream& os) {
-        kg::JsonWriter w(os);
-        w.begin_object();
-        w.field("clip", motion.name);
-        w.field("objective", to_string(options.target));
-        w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
-        w.field("source_duration", motion.duration());
-        w.field("duration", r.warp.duration);
-        w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
-        w.field("iterations", r.solve.iterations);
-        w.field("solve_seconds", ctx.reproducible() ? std::optional<double>() : r.solve.seconds);
-        w.field("objective_feasibility", r.feasibility);
-        w.field("objective_torque", r.torque);
-        w.field("torque_scale_nm", r.torque_scale);
-        w.field("share_inside", r.share_inside);
-        w.field("share_at_point", r.share_at_point);
-        w.field("fps", fps);
-        w.field("output_frames", frames);  // as written
-        w.field("frames_feasible", hulls.count(HullStatus::Feasible));
-        w.field("frames_flight", hulls.count(HullStatus::Flight));
-        w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
-        if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
-        w.field("feasible", r.feasible);
-        w.field("failed", failed);
-        w.field("message", r.message);
-        w.end_object();
-        os << '\n';
-      });
+    Report report;
+    {
+      kg::JsonWriter w(report);
+      w.begin_object();
+      w.field("clip", motion.name);
+      w.field("objective", to_string(options.target));
+      w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
+      w.field("source_duration", motion.duration());
+      w.field("duration", r.warp.duration);
+      w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
+      w.field("iterations", r.solve.iterations);
+      w.field("solve_seconds", ctx.reproducible() ? std::optional<double>() : r.solve.seconds);
+      w.field("objective_feasibility", r.feasibility);
+      w.field("objective_torque", r.torque);
+      w.field("torque_scale_nm", r.torque_scale);
+      w.field("share_inside", r.share_inside);
+      w.field("share_at_point", r.share_at_point);
+      w.field("fps", fps);
+      w.field("output_frames", frames);  // as played out
+      w.field("frames_feasible", hulls.count(HullStatus::Feasible));
+      w.field("frames_flight", hulls.count(HullStatus::Flight));
+      w.field("frames_infeasible", hulls.count(HullStatus::Infeasible));
+      if (r.shortest && r.shortest->feasible) w.field("shortest_duration", r.shortest->duration);
+      w.field("feasible", r.feasible);
+      w.field("failed", failed);
+      w.field("message", r.message);
+      w.end_object();
+    }
+    // Kept on failure: the sink writes why (io.write_report).
+    ctx.output("report", std::move(report));
     if (failed) throw std::runtime_error(r.message);
 
-    if (!curves_.empty()) {
-      const bool json = curves_.size() >= 5 && curves_.substr(curves_.size() - 5) == ".json";
-      kg::write_file_atomically(curves_, [&](std::ostream& os) {
-        json ? write_warp_json(os, r.warp, fps) : write_warp_csv(os, r.warp, fps);
-      });
-    }
-    if (!forces_.empty())
-      kg::write_file_atomically(
-          forces_, [&](std::ostream& os) { write_forces_json(os, hulls, torques.frames, r.warp, motion.fps); });
     ctx.output("warp", r.warp);
     ctx.output("motion", retimed_motion(motion, r.warp, fps));
   }
 
  private:
   double duration_scale_, duration_, fps_;
-  std::string curves_, forces_, report_;
   bool strict_;
   ClipRetimeOptions options_;
 };
@@ -507,21 +389,29 @@ class RetimeNode final : public graph::Node {
 NodeType retime_node_type() {
   NodeSpec spec{
       .type = "retime.retime",
-      .version = 1,
+      .version = 2,
       .doc = "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic spline, "
              "that minimises α·(distance to each frame's hull)² + β·|τ − τ'|² over the output (eq. 14, baked per "
              "frame and sector), with the ends kept, the duration given and any pins (source moments at output "
              "times) met exactly, by L-BFGS; τ' keeps the look (match), least effort (minimal) or another clip's "
              "(reference). mode time_optimal finds the shortest playback within the hulls instead. The result "
              "reports the share of output frames inside their hulls and, when the duration asks the impossible, "
-             "the shortest feasible one.",
+             "the shortest feasible one. Files are written by sinks: io.write_report (the report), "
+             "retime.write_curves (p(t)), retime.write_forces (per-frame forces).",
       .inputs = {{"motion", "kg.Motion", true, "the source clip (the one the hulls were built for)"},
                  {"hulls", "kg.Hulls", true, "per-frame hulls and force model (retime.hulls)"},
                  {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (retime.hulls)"},
                  {"reference_hulls", "kg.Hulls", false, "objective reference: the other clip's hulls"},
                  {"reference_torques", "kg.PathTorques", false, "objective reference: the other clip's torques"}},
       .outputs = {{"motion", "kg.Motion", true, "the retimed clip at `fps`"},
-                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"}},
+                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"},
+                  {.name = "report",
+                   .type = "kg.Report",
+                   .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
+                          "at `fps`, solve_seconds (null with --reproducible); set also when the node fails "
+                          "(failed: true, feasible, shortest_duration) and then still delivered, for "
+                          "io.write_report to say why",
+                   .kept_on_failure = true}},
       .params = {
           {.name = "duration_scale",
            .type = ParamType::Float,
@@ -592,26 +482,92 @@ NodeType retime_node_type() {
            .doc = "frame rate of the retimed clip; 0: the source's",
            .min = 0.0,
            .max = 1e5},
-          {.name = "curves",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "p(t), ṗ(t), p̈(t) per output frame: .csv, or .json; \"\" writes none"},
-          {.name = "forces",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "per source frame: hull, timing played, contact forces and torques (JSON); \"\" writes none"},
-          {.name = "report",
-           .type = ParamType::OutputPath,
-           .default_value = std::string(),
-           .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
-                  "at `fps` (JSON); written also when the node fails (failed: true, feasible, "
-                  "shortest_duration); \"\" writes none"},
           {.name = "strict",
            .type = ParamType::Bool,
            .default_value = false,
-           .doc = "fail (non-zero exit, no motion, curves or forces; the report only, saying why) when "
+           .doc = "fail (non-zero exit, no motion or warp; the report only, saying why) when "
                   "an output frame lies outside its hull"}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<RetimeNode>(p); }};
+}
+
+// A sink's `path` param: where it writes; "" writes nothing (a graph variable left empty).
+ParamSpec sink_path_param(const std::string& doc) {
+  return {.name = "path", .type = ParamType::OutputPath, .default_value = std::string(), .doc = doc};
+}
+
+// Writes `write`'s text to the node's path atomically; with no path, says that nothing was written.
+void write_sink_file(RunContext& ctx, const std::string& path, const std::function<void(std::ostream&)>& write) {
+  if (path.empty()) {
+    ctx.log("no path: nothing written");
+    ctx.report("written", false);
+    return;
+  }
+  kg::write_file_atomically(path, write);
+  ctx.report("written", true);
+}
+
+class WriteCurvesNode final : public graph::Node {
+ public:
+  explicit WriteCurvesNode(const Params& p) : path_(p.get<std::string>("path")) {}
+
+  void run(RunContext& ctx) const override {
+    const TimeWarp& warp = ctx.input<TimeWarp>("warp");
+    const double fps = ctx.input<motion::Motion>("motion").fps;
+    const bool json = path_.size() >= 5 && path_.substr(path_.size() - 5) == ".json";
+    write_sink_file(ctx, path_, [&](std::ostream& os) {
+      json ? write_warp_json(os, warp, fps) : write_warp_csv(os, warp, fps);
+    });
+  }
+
+ private:
+  std::string path_;
+};
+
+NodeType write_curves_node_type() {
+  NodeSpec spec{
+      .type = "retime.write_curves",
+      .version = 1,
+      .doc = "Writes a retiming's p(t), ṗ(t) and p̈(t) at each output frame of the retimed clip: CSV (t, p, pdot, "
+             "pddot), or JSON when the path ends in .json (the warp's controls too).",
+      .inputs = {{"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"},
+                 {"motion", "kg.Motion", true, "the retimed clip (retime.retime): its frame rate sets the frames"}},
+      .params = {sink_path_param("the .csv or .json file; \"\" writes none")},
+      .side_effects = true};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<WriteCurvesNode>(p); }};
+}
+
+class WriteForcesNode final : public graph::Node {
+ public:
+  explicit WriteForcesNode(const Params& p) : path_(p.get<std::string>("path")) {}
+
+  void run(RunContext& ctx) const override {
+    const Hulls& hulls = ctx.input<Hulls>("hulls");
+    const PathTorques& torques = ctx.input<PathTorques>("torques");
+    const TimeWarp& warp = ctx.input<TimeWarp>("warp");
+    if (static_cast<int>(hulls.frames.size()) != torques.frame_count())
+      throw std::invalid_argument("the hulls have " + std::to_string(hulls.frames.size()) + " frames and the torques " +
+                                  std::to_string(torques.frame_count()) + " (expected the same clip)");
+    write_sink_file(ctx, path_, [&](std::ostream& os) {
+      write_forces_json(os, hulls, torques.frames, warp, torques.fps);
+    });
+  }
+
+ private:
+  std::string path_;
+};
+
+NodeType write_forces_node_type() {
+  NodeSpec spec{
+      .type = "retime.write_forces",
+      .version = 1,
+      .doc = "Writes, per source frame of a retiming, the hull, the timing (p̈, ṗ²) the warp plays it at and whether "
+             "that lies inside, the contact forces per patch there and the generalised forces (JSON).",
+      .inputs = {{"hulls", "kg.Hulls", true, "the hulls the retiming used (retime.hulls)"},
+                 {"torques", "kg.PathTorques", true, "the coefficients they were built with (retime.hulls)"},
+                 {"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"}},
+      .params = {sink_path_param("the JSON file; \"\" writes none")},
+      .side_effects = true};
+  return {std::move(spec), [](const Params& p) { return std::make_unique<WriteForcesNode>(p); }};
 }
 
 }  // namespace
@@ -625,6 +581,8 @@ std::vector<graph::NodeType> retime_node_types() {
   out.push_back(retime::torque_limits_node_type());
   out.push_back(retime::hulls_node_type());
   out.push_back(retime::retime_node_type());
+  out.push_back(retime::write_curves_node_type());
+  out.push_back(retime::write_forces_node_type());
   return out;
 }
 

@@ -94,7 +94,7 @@ TEST_CASE("--help and --version", "[cli]") {
   CHECK(kinegraph({"run", "--help"}).code == 0);  // help wins wherever it is
   const Result v = kinegraph({"--version"});
   CHECK(v.code == 0);
-  CHECK_THAT(v.out, StartsWith("kinegraph ") && Contains("plugin ABI 3"));
+  CHECK_THAT(v.out, StartsWith("kinegraph ") && Contains("plugin ABI 4"));
 }
 
 TEST_CASE("usage errors exit 2 with a message on stderr", "[cli]") {
@@ -347,7 +347,7 @@ TEST_CASE("nodes: text and --json", "[cli]") {
   INFO(show(j));
   REQUIRE(j.code == 0);
   const YAML::Node json = YAML::Load(j.out);
-  CHECK(json["plugin_abi"].as<int>() == 3);
+  CHECK(json["plugin_abi"].as<int>() == 4);
   REQUIRE(json["plugins"].size() >= 2);
   CHECK(
       json["plugins"][0]["path"].as<std::string>() ==
@@ -396,7 +396,7 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
     CHECK(r.code == 0);
     CHECK(read_file(out) == "5\n");
     for (const char* message :
-         {"ABI version 999, this host needs 3", "no kg_plugin_entry symbol", "entry threw",
+         {"ABI version 999, this host needs 4", "no kg_plugin_entry symbol", "entry threw",
           "no kg_plugin_abi_version symbol", "is not a Boost.DLL alias", "a library this one depends on",
           "node type test.constant already registered by"}) {
       CHECK_THAT(r.err, Contains("kinegraph: warning: ") && Contains(message));
@@ -488,7 +488,7 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
     const Result r = kinegraph(with_plugins({"run", g.string(), "--set", "out=" + out.string()}));
     INFO(show(r));
     CHECK(r.code == 4);
-    CHECK_THAT(r.err, Contains("ABI version 999, this host needs 3"));
+    CHECK_THAT(r.err, Contains("ABI version 999, this host needs 4"));
   }
 }
 

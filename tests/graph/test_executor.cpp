@@ -400,3 +400,215 @@ TEST_CASE("a running node finds the registry's extensions through its context") 
   REQUIRE(r.ok);
   CHECK(r.outputs.at("look.out").get<double>() == 42.0);
 }
+
+// Caching and effects (DESIGN.md 13): nodes with the same key compute once; sinks always run;
+// values are freed after their last consumer; a report set before a failure still reaches its sink.
+
+TEST_CASE("nodes of one run with the same type, params and inputs compute once", "[cache]") {
+  const char* text = R"(version: 1
+nodes:
+  a: {type: test.constant, params: {value: 2}}
+  b: {type: test.constant, params: {value: 2}}
+  other: {type: test.constant, params: {value: 3}}
+  twice_a: {type: test.scale, params: {factor: 2}}
+  twice_b: {type: test.scale, params: {factor: 2}}
+  thrice_b: {type: test.scale, params: {factor: 3}}
+  twice_other: {type: test.scale, params: {factor: 2}}
+connections:
+  - {from: a.out, to: twice_a.in}
+  - {from: b.out, to: twice_b.in}
+  - {from: b.out, to: thrice_b.in}
+  - {from: other.out, to: twice_other.in}
+)";
+  for (int jobs : {1, 3}) {
+    INFO("jobs " << jobs);
+    auto journal = std::make_shared<kg_test::Journal>();
+    const Registry registry = kg_test::test_registry(journal);
+    const Graph g = load_graph_from_string(text, "same.yaml", registry);
+    Logged log;
+    const RunResult r = run_graph(g, registry, log.options(jobs));
+    REQUIRE(r.ok);
+    // b is a; twice_b's producer has a's key, so it is twice_a too.
+    CHECK(run_of(r, "b").same_as == "a");
+    CHECK(run_of(r, "twice_b").same_as == "twice_a");
+    CHECK(run_of(r, "b").key == run_of(r, "a").key);
+    CHECK(run_of(r, "b").status == NodeStatus::Ok);
+    // Other params, other inputs: their own runs.
+    for (const std::string id : {"a", "other", "twice_a", "thrice_b", "twice_other"}) {
+      CHECK(run_of(r, id).same_as.empty());
+      CHECK(run_of(r, id).key.size() == 64);
+    }
+    CHECK(run_of(r, "thrice_b").key != run_of(r, "twice_b").key);
+    CHECK(run_of(r, "twice_other").key != run_of(r, "twice_a").key);
+    std::vector<std::string> ran = journal->ran;
+    std::sort(ran.begin(), ran.end());
+    CHECK(ran == std::vector<std::string>{"a", "other", "thrice_b", "twice_a", "twice_other"});
+    CHECK(log.has("b", "same_as: a"));
+    CHECK(log.has("twice_b", "same_as: twice_a"));
+    // The taken results are the first's values themselves.
+    CHECK(&r.outputs.at("twice_b.out").get<double>() == &r.outputs.at("twice_a.out").get<double>());
+    CHECK(r.outputs.at("thrice_b.out").get<double>() == 6.0);
+  }
+}
+
+TEST_CASE("a node taking another's results takes its figures, and its failure with the same message",
+          "[cache]") {
+  const char* text = R"(version: 1
+nodes:
+  f1: {type: test.figures}
+  f2: {type: test.figures}
+  bad1: {type: test.fail, params: {message: "solver exploded"}}
+  bad2: {type: test.fail, params: {message: "solver exploded"}}
+  after2: {type: test.scale}
+connections:
+  - {from: bad2.out, to: after2.in}
+)";
+  for (int jobs : {1, 2}) {
+    INFO("jobs " << jobs);
+    const Registry registry = kg_test::test_registry();
+    const Graph g = load_graph_from_string(text, "same_fail.yaml", registry);
+    Logged log;
+    const RunResult r = run_graph(g, registry, log.options(jobs));
+    CHECK_FALSE(r.ok);
+    CHECK(run_of(r, "f2").same_as == "f1");
+    CHECK(run_of(r, "f2").figures == run_of(r, "f1").figures);
+    CHECK(run_of(r, "f2").figures.size() == 4);
+    const NodeRun& bad2 = run_of(r, "bad2");
+    CHECK(bad2.same_as == "bad1");
+    CHECK(bad2.status == NodeStatus::Failed);
+    CHECK(bad2.message == "solver exploded");
+    CHECK(log.has("bad2", "failed: solver exploded"));
+    CHECK(run_of(r, "after2").status == NodeStatus::Skipped);
+    CHECK(run_of(r, "after2").message == "not run: upstream node 'bad2' failed");
+
+    kg::test::TempDir dir;
+    write_report_json(dir / "report.json", g, r);
+    const std::string json = kg::test::read_file(dir / "report.json");
+    CHECK_THAT(json, Catch::Contains("\"id\": \"f2\"") && Catch::Contains("\"same_as\": \"f1\""));
+    CHECK_THAT(json, Catch::Contains("\"same_as\": \"\""));
+  }
+}
+
+namespace {
+
+// Nodes that watch a value's life: test.hold outputs a fresh string and keeps a weak reference to
+// it in `probe`; test.pass copies its input string; test.alive reports (figure `alive`) whether
+// the watched string still lives when it runs.
+Registry lifetime_registry(std::shared_ptr<std::weak_ptr<const std::string>> probe) {
+  Registry r = kg_test::test_registry();
+  auto string_port = [](const std::string& name) { return PortSpec{name, "kg.String", true, "text"}; };
+  r.add_node({NodeSpec{"test.hold", 1, "Outputs a string it watches.", {}, {string_port("out")}, {}},
+              [probe](const Params&) {
+                return kg_test::make_fn_node([probe](RunContext& ctx) {
+                  auto value = std::make_shared<const std::string>("held");
+                  *probe = value;
+                  ctx.set_output("out", Value::share(value));
+                });
+              }});
+  r.add_node({NodeSpec{"test.pass", 1, "Copies its string.", {string_port("in")}, {string_port("out")}, {}},
+              [](const Params&) {
+                return kg_test::make_fn_node(
+                    [](RunContext& ctx) { ctx.output("out", std::string(ctx.input<std::string>("in"))); });
+              }});
+  r.add_node({NodeSpec{"test.alive", 1, "Whether the watched string lives.", {string_port("text")}, {}, {}},
+              [probe](const Params&) {
+                return kg_test::make_fn_node([probe](RunContext& ctx) { ctx.report("alive", !probe->expired()); });
+              }});
+  return r;
+}
+
+}  // namespace
+
+TEST_CASE("a value is freed after its last consumer unless keep_outputs", "[cache]") {
+  // hold -> pass -> alive: alive runs after pass, hold's only consumer, has run.
+  const char* text = R"(version: 1
+nodes:
+  hold: {type: test.hold}
+  pass: {type: test.pass}
+  alive: {type: test.alive}
+connections:
+  - {from: hold.out, to: pass.in}
+  - {from: pass.out, to: alive.text}
+)";
+  auto probe = std::make_shared<std::weak_ptr<const std::string>>();
+  const Registry registry = lifetime_registry(probe);
+  const Graph g = load_graph_from_string(text, "life.yaml", registry);
+  RunOptions options;
+  options.on_log = [](const std::string&, const std::string&) {};
+
+  options.keep_outputs = false;
+  const RunResult freed = run_graph(g, registry, options);
+  REQUIRE(freed.ok);
+  CHECK(freed.outputs.empty());
+  CHECK(std::get<bool>(run_of(freed, "alive").figures.at(0).second) == false);
+  CHECK(probe->expired());
+
+  options.keep_outputs = true;
+  const RunResult kept = run_graph(g, registry, options);
+  REQUIRE(kept.ok);
+  CHECK(std::get<bool>(run_of(kept, "alive").figures.at(0).second) == true);
+  CHECK(kept.outputs.at("hold.out").get<std::string>() == "held");
+  CHECK(kept.outputs.size() == 2);
+}
+
+TEST_CASE("the executor never merges nodes with side effects, nor nodes writing files", "[cache]") {
+  const char* text = R"(version: 1
+nodes:
+  src: {type: test.constant, params: {value: 1}}
+  s1: {type: test.sleep, params: {ms: 0}}
+  s2: {type: test.sleep, params: {ms: 0}}
+connections:
+  - {from: src.out, to: s1.in}
+  - {from: src.out, to: s2.in}
+)";
+  auto journal = std::make_shared<kg_test::Journal>();
+  const Registry registry = kg_test::test_registry(journal);
+  const Graph g = load_graph_from_string(text, "sinks.yaml", registry);
+  const RunResult r = run_graph(g, registry, {.jobs = 1, .on_log = {}});
+  REQUIRE(r.ok);
+  CHECK(run_of(r, "s1").key == run_of(r, "s2").key);
+  CHECK(run_of(r, "s2").same_as.empty());
+  CHECK(journal->ran.size() == 3);
+  NodeSpec writer{"test.writer", 1, "", {}, {}, {{"path", ParamType::OutputPath, std::string(), ""}}};
+  CHECK(writer.has_side_effects());
+  CHECK_FALSE(NodeSpec{"test.pure", 1, ""}.has_side_effects());
+}
+
+TEST_CASE("an output kept on failure reaches its consumers; the others skip", "[cache]") {
+  Registry registry = kg_test::test_registry();
+  auto string_port = [](const std::string& name) { return PortSpec{name, "kg.String", true, "text"}; };
+  PortSpec why = string_port("why");
+  why.kept_on_failure = true;
+  registry.add_node({NodeSpec{"test.give_up", 1, "Sets why, then fails.", {}, {why, kg_test::scalar_port("out")}, {}},
+                     [](const Params&) {
+                       return kg_test::make_fn_node([](RunContext& ctx) {
+                         ctx.output("why", std::string("out of reach"));
+                         ctx.output("out", 1.0);
+                         throw std::runtime_error("gave up");
+                       });
+                     }});
+  registry.add_node({NodeSpec{"test.say", 1, "Logs its string.", {string_port("in")}, {}, {}},
+                     [](const Params&) {
+                       return kg_test::make_fn_node([](RunContext& ctx) { ctx.log("says " + ctx.input<std::string>("in")); });
+                     }});
+  const char* text = R"(version: 1
+nodes:
+  solver: {type: test.give_up}
+  say: {type: test.say}
+  after: {type: test.scale}
+connections:
+  - {from: solver.why, to: say.in}
+  - {from: solver.out, to: after.in}
+)";
+  const Graph g = load_graph_from_string(text, "kept.yaml", registry);
+  Logged log;
+  const RunResult r = run_graph(g, registry, log.options(1));
+  CHECK_FALSE(r.ok);
+  CHECK(run_of(r, "solver").status == NodeStatus::Failed);
+  CHECK(run_of(r, "solver").message == "gave up");
+  CHECK(run_of(r, "say").status == NodeStatus::Ok);
+  CHECK(log.has("say", "says out of reach"));
+  CHECK(run_of(r, "after").status == NodeStatus::Skipped);
+  CHECK(r.outputs.count("solver.why") == 1);
+  CHECK(r.outputs.count("solver.out") == 0);
+}

@@ -174,6 +174,7 @@ inline void register_test_nodes(Registry& r, std::shared_ptr<Journal> journal = 
     ParamSpec t{"timeout_ms", ParamType::Int, std::int64_t{5000}, "how long to wait"};
     t.min = 0;
     s.params.push_back(t);
+    s.side_effects = true;  // meets another node outside the run's values: never merged
     r.add_node({s, [rendezvous, note](const Params& p) {
                   const auto ms = std::chrono::milliseconds(p.get<std::int64_t>("timeout_ms"));
                   return make_fn_node([rendezvous, ms, note](RunContext& ctx) {
@@ -190,6 +191,7 @@ inline void register_test_nodes(Registry& r, std::shared_ptr<Journal> journal = 
     ms.min = 0;
     ms.max = 10000;
     s.params.push_back(ms);
+    s.side_effects = true;  // its wall time is what the tests observe: never merged
     r.add_node({s, [note](const Params& p) {
                   const auto d = std::chrono::milliseconds(p.get<std::int64_t>("ms"));
                   return make_fn_node([d, note](RunContext& ctx) {

@@ -251,7 +251,7 @@ TEST_CASE(
   INFO(show(r));
   REQUIRE(r.code == 0);
   // Nothing edited: the reference hulls are the hulls, built once.
-  CHECK_THAT(r.err, Catch::Contains("the same hulls as another retime.hulls node of this run"));
+  CHECK_THAT(r.err, Catch::Contains("hulls: same_as: reference"));
   const Source source = source_at_30(hop);
   const YAML::Node rep = check_report(dir / "report.json", 0.5, source.duration);
   check_retimed_clip(dir / "out.bvh", 0.5 * source.duration, source.joints);

@@ -259,8 +259,9 @@ TEST_CASE("metrics: energy above the key cut-off", "[metrics]") {
   }
 }
 
-TEST_CASE("retarget.metrics node: figures and the JSON file", "[metrics]") {
-  const graph::Registry registry = test::registry_of(retarget_metrics_node_types());
+TEST_CASE("retarget.metrics node: figures and the JSON report io.write_report writes", "[metrics]") {
+  graph::Registry registry = test::registry_of(retarget_metrics_node_types());
+  for (graph::NodeType& type : report_node_types()) registry.add_node(std::move(type));
   Motion source = blank(40, 30);
   for (int f = 0; f < 40; ++f) source.values(f, 1) = 1.0;
   Motion result = source;
@@ -271,7 +272,7 @@ TEST_CASE("retarget.metrics node: figures and the JSON file", "[metrics]") {
   const std::string path = (dir.path() / "out" / "metrics.json").string();
   KeySpacing keys{std::vector<int>(6, 2), "by hand"};
   const test::NodeContext ctx = test::run_node(
-      registry, "retarget.metrics", test::params_for(registry, "retarget.metrics", {{"path", path}}),
+      registry, "retarget.metrics", test::params_for(registry, "retarget.metrics"),
       {{"motion", graph::Value::make(result)},
        {"constraints", graph::Value::make(set)},
        {"source", graph::Value::make(source)},
@@ -281,13 +282,24 @@ TEST_CASE("retarget.metrics node: figures and the JSON file", "[metrics]") {
   CHECK(std::get<double>(ctx.figures.at("jerk_rotation_increase")) > 0);
   CHECK(std::get<double>(ctx.figures.at("solve_seconds")) == 0.25);
   CHECK(std::get<std::int64_t>(ctx.figures.at("plants")) == 1);
+  const kg::Report& report = ctx.outputs.at("report").get<kg::Report>();
+  const test::NodeContext written = test::run_node(
+      registry, "io.write_report", test::params_for(registry, "io.write_report", {{"path", path}}),
+      {{"report", ctx.outputs.at("report")}});
+  CHECK(std::get<bool>(written.figures.at("written")));
   std::ifstream in(path);
   REQUIRE(in);
   std::stringstream text;
   text << in.rdbuf();
-  CHECK(text.str() == ctx.outputs.at("json").get<std::string>());
+  CHECK(text.str() == report.text() + "\n");  // the document, then a blank line
   CHECK_THAT(text.str(), Contains("\"version\": 1") && Contains("\"reference\": \"source\"") &&
                              Contains("\"cutoff_hz_min\": 7.5") && Contains("\"solve_seconds\": 0.25"));
+  // No path: nothing written, and said so.
+  const test::NodeContext none = test::run_node(registry, "io.write_report",
+                                                test::params_for(registry, "io.write_report"),
+                                                {{"report", ctx.outputs.at("report")}});
+  CHECK_FALSE(std::get<bool>(none.figures.at("written")));
+  CHECK(none.logged("nothing written"));
 
   // Bad input names what is wrong.
   Constraint other = on_foot("position", {0, 0, 0}, 1, 1, "partner hand");

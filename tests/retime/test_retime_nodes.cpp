@@ -1,14 +1,17 @@
-// The retime.hulls node: two nodes of a run with the same inputs and settings build the hulls
-// once (graphs/retime.yaml's reference and hulls when nothing is edited); other settings, other
-// input objects, or inputs released since, build their own.
+// The retime.hulls node in the executor: two nodes of a run with the same params and inputs build
+// the hulls once, the second taking the first's results (same_as; graphs/retime.yaml's reference
+// and hulls when nothing is edited); other settings, inputs from other nodes, or another run,
+// build their own.
 #include <catch2/catch.hpp>
 
-#include <optional>
+#include <algorithm>
+#include <array>
 #include <string>
-#include <thread>
-#include <tuple>
+#include <vector>
 
 #include "kg/retime/nodes.hpp"
+#include "kg/graph/executor.hpp"
+#include "kg/graph/yaml_io.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/resample.hpp"
@@ -32,84 +35,122 @@ std::map<std::string, graph::Value> walk_inputs() {
           {"torques", graph::Value::make(retime::path_torques(body, walk, retime::path_derivatives(walk)))}};
 }
 
+// A node type outputting `value` on its port `out` (the graph's inputs, made in the test).
+graph::NodeType value_node(const std::string& type, const graph::Value& value) {
+  class ValueNode final : public graph::Node {
+   public:
+    explicit ValueNode(graph::Value v) : v_(std::move(v)) {}
+    void run(graph::RunContext& ctx) const override { ctx.set_output("out", v_); }
+
+   private:
+    graph::Value v_;
+  };
+  return {graph::NodeSpec{type, 1, "a value made by the test", {}, {{"out", value.type_name(), true, ""}}, {}},
+          [value](const graph::Params&) { return std::make_unique<ValueNode>(value); }};
+}
+
+// retime.hulls' types, and test.body, test.contacts, test.contacts_copy (equal contacts in
+// another object) and test.torques outputting walk_inputs().
+graph::Registry hulls_registry() {
+  graph::Registry registry = test::registry_of(retime_node_types());
+  const std::map<std::string, graph::Value> in = walk_inputs();
+  registry.add_node(value_node("test.body", in.at("body")));
+  registry.add_node(value_node("test.contacts", in.at("contacts")));
+  registry.add_node(value_node("test.contacts_copy", graph::Value::make(in.at("contacts").get<retime::Contacts>())));
+  registry.add_node(value_node("test.torques", in.at("torques")));
+  return registry;
+}
+
+// Graph text: the inputs and, per entry, a retime.hulls node `id` with `params` whose contacts
+// come from `contacts`.
+std::string hulls_graph(const std::vector<std::array<std::string, 3>>& hulls) {
+  std::string text = "version: 1\nnodes:\n  body: {type: test.body}\n  contacts: {type: test.contacts}\n"
+                     "  contacts_copy: {type: test.contacts_copy}\n  torques: {type: test.torques}\n";
+  std::string wires = "connections:\n";
+  for (const auto& [id, params, contacts] : hulls) {
+    text += "  " + id + ": {type: retime.hulls, params: {" + params + "}}\n";
+    wires += "  - {from: body.out, to: " + id + ".body}\n  - {from: " + contacts + ".out, to: " + id +
+             ".contacts}\n  - {from: torques.out, to: " + id + ".torques}\n";
+  }
+  return text + wires;
+}
+
+const graph::NodeRun& run_of(const graph::RunResult& r, const std::string& id) {
+  for (const graph::NodeRun& n : r.nodes)
+    if (n.id == id) return n;
+  throw std::logic_error("no node " + id);
+}
+
+graph::RunOptions quiet(int jobs) {
+  return {.jobs = jobs, .on_log = [](const std::string&, const std::string&) {}};
+}
+
 }  // namespace
 
-TEST_CASE("retime.hulls nodes with the same inputs and settings share one build", "[retime][hulls][node]") {
-  const graph::Registry registry = test::registry_of(retime_node_types());
-  const std::map<std::string, graph::Value> inputs = walk_inputs();
-  auto run = [&](std::map<std::string, graph::ParamValue> params,
-                 const std::map<std::string, graph::Value>& in) {
-    return test::run_node(registry, "retime.hulls", test::params_for(registry, "retime.hulls", params), in);
-  };
-  auto hulls_of = [](const test::NodeContext& ctx) { return &ctx.outputs.at("hulls").get<retime::Hulls>(); };
+TEST_CASE("retime.hulls nodes with the same params and inputs share one build", "[retime][hulls][node]") {
+  const graph::Registry registry = hulls_registry();
+  const graph::Graph g = graph::load_graph_from_string(
+      hulls_graph({{"first", "", "contacts"},
+                   {"same", "", "contacts"},
+                   {"lighter", "gravity: 5", "contacts"},
+                   {"copy", "", "contacts_copy"}}),
+      "hulls.yaml", registry);
+  std::vector<std::pair<std::string, std::string>> logs;
+  graph::RunOptions options = quiet(1);
+  options.on_log = [&](const std::string& id, const std::string& message) { logs.emplace_back(id, message); };
+  const graph::RunResult r = graph::run_graph(g, registry, options);
+  REQUIRE(r.ok);
+  auto hulls_of = [&](const std::string& id) { return &r.outputs.at(id + ".hulls").get<retime::Hulls>(); };
 
-  const test::NodeContext first = run({}, inputs);
-  CHECK_FALSE(std::get<bool>(first.figures.at("shared")));
-  // The body's own gravity written out is the same setting: shared, not built again.
-  const test::NodeContext same = run({{"gravity", std::vector<double>{9.81}}}, inputs);
-  CHECK(std::get<bool>(same.figures.at("shared")));
-  CHECK(same.logged("shared"));
-  CHECK(hulls_of(same) == hulls_of(first));
-  CHECK(&same.outputs.at("torques").get<retime::PathTorques>() ==
-        &first.outputs.at("torques").get<retime::PathTorques>());
-  CHECK(same.figures.at("feasible") == first.figures.at("feasible"));
+  CHECK(run_of(r, "first").same_as.empty());
+  CHECK(run_of(r, "same").same_as == "first");
+  CHECK(std::find(logs.begin(), logs.end(), std::make_pair(std::string("same"), std::string(
+                      "same_as: first (the same type, params and inputs: its results, not run again)"))) != logs.end());
+  CHECK(hulls_of("same") == hulls_of("first"));
+  CHECK(&r.outputs.at("same.torques").get<retime::PathTorques>() ==
+        &r.outputs.at("first.torques").get<retime::PathTorques>());
+  CHECK(run_of(r, "same").figures == run_of(r, "first").figures);
 
   // Another gravity: its own hulls.
-  const test::NodeContext lighter = run({{"gravity", std::vector<double>{5.0}}}, inputs);
-  CHECK_FALSE(std::get<bool>(lighter.figures.at("shared")));
-  CHECK(hulls_of(lighter) != hulls_of(first));
-  CHECK(hulls_of(lighter)->gravity.y() == Approx(-5));
-  // Equal contacts in another object: not taken for the same input.
-  std::map<std::string, graph::Value> copied = inputs;
-  copied["contacts"] = graph::Value::make(inputs.at("contacts").get<retime::Contacts>());
-  const test::NodeContext copy = run({}, copied);
-  CHECK_FALSE(std::get<bool>(copy.figures.at("shared")));
-  CHECK(hulls_of(copy)->frames.size() == hulls_of(first)->frames.size());
+  CHECK(run_of(r, "lighter").same_as.empty());
+  CHECK(hulls_of("lighter") != hulls_of("first"));
+  CHECK(hulls_of("lighter")->gravity.y() == Approx(-5));
+  // Equal contacts from another node: not taken for the same input.
+  CHECK(run_of(r, "copy").same_as.empty());
+  CHECK(hulls_of("copy") != hulls_of("first"));
+  CHECK(hulls_of("copy")->frames.size() == hulls_of("first")->frames.size());
 }
 
-TEST_CASE("retime.hulls builds again once the shared hulls are released", "[retime][hulls][node]") {
-  const graph::Registry registry = test::registry_of(retime_node_types());
-  const std::map<std::string, graph::Value> inputs = walk_inputs();
-  const graph::Params params = test::params_for(registry, "retime.hulls", {});
-  { const test::NodeContext gone = test::run_node(registry, "retime.hulls", params, inputs); }
-  const test::NodeContext again = test::run_node(registry, "retime.hulls", params, inputs);
-  CHECK_FALSE(std::get<bool>(again.figures.at("shared")));
+TEST_CASE("retime.hulls builds again in another run", "[retime][hulls][node]") {
+  const graph::Registry registry = hulls_registry();
+  const graph::Graph g = graph::load_graph_from_string(hulls_graph({{"first", "", "contacts"}}), "one.yaml", registry);
+  const graph::RunResult a = graph::run_graph(g, registry, quiet(1));
+  const graph::RunResult b = graph::run_graph(g, registry, quiet(1));
+  REQUIRE(a.ok);
+  REQUIRE(b.ok);
+  CHECK(run_of(b, "first").same_as.empty());
+  CHECK(&a.outputs.at("first.hulls").get<retime::Hulls>() != &b.outputs.at("first.hulls").get<retime::Hulls>());
 }
 
-TEST_CASE("retime.hulls nodes running at once share one build, and share its failure",
-          "[retime][hulls][node]") {
-  const graph::Registry registry = test::registry_of(retime_node_types());
-  const std::map<std::string, graph::Value> inputs = walk_inputs();
-  auto run_pair = [&](const graph::Params& params) {
-    // Two threads as the executor runs independent nodes: whichever comes second waits for the
-    // first's build (or finds it done).
-    std::optional<test::NodeContext> a, b;
-    std::string error_a, error_b;
-    auto run = [&](std::optional<test::NodeContext>& out, std::string& error) {
-      try {
-        out = test::run_node(registry, "retime.hulls", params, inputs);
-      } catch (const std::exception& e) {
-        error = e.what();
-      }
-    };
-    std::thread other([&] { run(b, error_b); });
-    run(a, error_a);
-    other.join();
-    return std::make_tuple(std::move(a), std::move(b), error_a, error_b);
-  };
+TEST_CASE("retime.hulls nodes ready at once share one build, and share its failure", "[retime][hulls][node]") {
+  const graph::Registry registry = hulls_registry();
   {
-    const auto [a, b, error_a, error_b] = run_pair(test::params_for(registry, "retime.hulls", {}));
-    REQUIRE(a.has_value());
-    REQUIRE(b.has_value());
-    CHECK(std::get<bool>(a->figures.at("shared")) != std::get<bool>(b->figures.at("shared")));
-    CHECK(&a->outputs.at("hulls").get<retime::Hulls>() == &b->outputs.at("hulls").get<retime::Hulls>());
+    const graph::Graph g = graph::load_graph_from_string(
+        hulls_graph({{"a", "", "contacts"}, {"b", "", "contacts"}}), "pair.yaml", registry);
+    const graph::RunResult r = graph::run_graph(g, registry, quiet(2));
+    REQUIRE(r.ok);
+    CHECK(run_of(r, "b").same_as == "a");
+    CHECK(&r.outputs.at("a.hulls").get<retime::Hulls>() == &r.outputs.at("b.hulls").get<retime::Hulls>());
   }
   // The walk's torques model no segment, so a mass scale fails inside the build: both nodes
   // fail with its message.
-  const auto [a, b, error_a, error_b] =
-      run_pair(test::params_for(registry, "retime.hulls", {{"mass_scale", 2.0}}));
-  CHECK_FALSE(a.has_value());
-  CHECK_FALSE(b.has_value());
-  CHECK_THAT(error_a, Catch::Contains("a mass scale needs the segment"));
-  CHECK(error_b == error_a);
+  const graph::Graph g = graph::load_graph_from_string(
+      hulls_graph({{"a", "mass_scale: 2", "contacts"}, {"b", "mass_scale: 2", "contacts"}}), "fail.yaml", registry);
+  const graph::RunResult r = graph::run_graph(g, registry, quiet(2));
+  CHECK_FALSE(r.ok);
+  CHECK(run_of(r, "a").status == graph::NodeStatus::Failed);
+  CHECK(run_of(r, "b").status == graph::NodeStatus::Failed);
+  CHECK_THAT(run_of(r, "a").message, Catch::Contains("a mass scale needs the segment"));
+  CHECK(run_of(r, "b").message == run_of(r, "a").message);
+  CHECK(run_of(r, "b").same_as == "a");
 }

@@ -207,6 +207,7 @@ kg::graph::PluginRecord make_record() {
          .default_value = 5.0,
          .doc = "seconds to wait",
          .min = 0.0}}}));
+  r.nodes.back().spec.side_effects = true;  // meets other nodes outside the run's values: never merged
   return r;
 }
 

@@ -23,6 +23,8 @@
 #include <variant>
 #include <vector>
 
+#include "kg/base/report.hpp"
+
 namespace kg {
 
 class JsonWriter {
@@ -30,6 +32,9 @@ class JsonWriter {
   // indent 0: one line; otherwise pretty-printed with that many spaces. `os` is not owned and must
   // outlive the writer.
   explicit JsonWriter(std::ostream& os, int indent = 2);
+  // Builds the document into `into` (not owned, must outlive the writer) instead of writing
+  // text: it is set when the outermost container ends (a lone top-level value: at once).
+  explicit JsonWriter(Report& into);
   ~JsonWriter();
   JsonWriter(const JsonWriter&) = delete;
   JsonWriter& operator=(const JsonWriter&) = delete;
@@ -75,8 +80,9 @@ class JsonWriter {
 
  private:
   struct Document;  // the ordered_json being built and the containers still open
-  std::ostream& os_;
-  int indent_;
+  std::ostream* os_ = nullptr;  // one of os_ and report_
+  Report* report_ = nullptr;
+  int indent_ = 2;
   std::unique_ptr<Document> doc_;
 };
 

@@ -20,6 +20,10 @@ struct PortSpec {
   std::string type;  // stable type name, e.g. "kg.Motion"
   bool required = true;  // inputs only: an unconnected required input is a validation error
   std::string doc;
+  // Outputs only: a value set before the node failed still reaches the consumers of this port
+  // (a solver's report, saying why it failed, for the sink that writes it); their other inputs
+  // from the failed node make them skip as usual.
+  bool kept_on_failure = false;
 };
 
 struct ParamSpec {
@@ -40,6 +44,13 @@ struct NodeSpec {
   std::vector<PortSpec> inputs{};  // {} lets designated initializers leave them out
   std::vector<PortSpec> outputs{};
   std::vector<ParamSpec> params{};
+  // The node acts outside the run (a sink: writes files): the executor never takes another
+  // node's results for it (DESIGN.md 13), however alike their type, params and inputs. A node
+  // with an output_path param is taken to have side effects whatever this says.
+  bool side_effects = false;
+
+  // side_effects, or an output_path param.
+  bool has_side_effects() const;
 
   const PortSpec* find_input(const std::string& name) const;
   const PortSpec* find_output(const std::string& name) const;

@@ -32,7 +32,8 @@
 namespace kg::graph {
 
 // 3: typed extensions (extension.hpp) and NodeType::create_with_registry.
-inline constexpr std::uint32_t kPluginAbiVersion = 3;
+// 4: NodeSpec::side_effects and PortSpec::kept_on_failure (the executor's caching and sinks).
+inline constexpr std::uint32_t kPluginAbiVersion = 4;
 
 struct PluginRecord {
   std::string id;       // unique, e.g. "kg.lowpass"

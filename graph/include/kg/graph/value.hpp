@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "kg/base/error.hpp"
+#include "kg/base/report.hpp"
 
 namespace kg::graph {
 
@@ -89,3 +90,5 @@ KG_DECLARE_TYPE(double, "kg.Scalar")
 KG_DECLARE_TYPE(std::int64_t, "kg.Int")
 KG_DECLARE_TYPE(bool, "kg.Bool")
 KG_DECLARE_TYPE(std::string, "kg.String")
+// A JSON document (kg/base/report.hpp): a solver's report, written by a sink (io.write_report).
+KG_DECLARE_TYPE(kg::Report, "kg.Report")

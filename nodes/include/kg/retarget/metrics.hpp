@@ -56,6 +56,7 @@
 
 #include <Eigen/Core>
 
+#include "kg/base/report.hpp"
 #include "kg/motion/motion.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
@@ -153,6 +154,8 @@ struct RetargetMetrics {
 // character 1 without result2, or mismatched motions (message says which).
 RetargetMetrics compute_metrics(const MetricsInputs& inputs);
 // The JSON document (version 1), lengths in cm as the header comment says.
+Report metrics_report(const RetargetMetrics& metrics);
+// metrics_report's text and a blank line, as io.write_report writes it.
 void write_metrics_json(std::ostream& os, const RetargetMetrics& metrics);
 
 }  // namespace kg::retarget
