@@ -122,6 +122,7 @@ struct Input {
 }  // namespace
 
 RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options) {
+  options.validate();
   const auto t0 = Clock::now();
   const std::size_t n = graph.nodes.size();
 

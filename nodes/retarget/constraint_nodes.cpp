@@ -62,6 +62,8 @@ class FootplantsNode final : public Node {
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
                                                              : retarget::PlantFlavour::Fixed;
     make_.above_floor = p.get<bool>("above_floor");
+    detect_.validate();  // a bad setting fails when the graph loads
+    make_.validate();
   }
 
   void run(RunContext& ctx) const override {
@@ -243,6 +245,7 @@ class HoldsNode final : public Node {
     options_.max_distance = p.get<double>("max_distance");
     options_.hysteresis = p.get<double>("hysteresis");
     options_.min_duration_s = p.get<double>("min_duration_s");
+    options_.validate();  // a bad setting fails when the graph loads
   }
 
   void run(RunContext& ctx) const override {

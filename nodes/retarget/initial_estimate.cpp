@@ -1,5 +1,6 @@
 // The initial estimate m1 (§3.8, step 2 of §4); see initial_estimate.hpp for each step.
 #include "kg/retarget/initial_estimate.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -243,6 +244,11 @@ Eigen::MatrixXd smooth_zero_phase(const Eigen::MatrixXd& x, double sigma) {
   return out;
 }
 
+void InitialEstimateOptions::validate() const {
+  options::require(options::non_negative(smooth_seconds), "InitialEstimateOptions", "smooth_seconds", smooth_seconds,
+                   ">= 0 and finite (seconds; 0: no smoothing)");
+}
+
 InitialEstimate initial_estimate(const motion::Motion& source, const Target& target,
                                  const ConstraintSet* constraints, const KindFinder& kinds,
                                  const InitialEstimateOptions& options) {
@@ -250,8 +256,7 @@ InitialEstimate initial_estimate(const motion::Motion& source, const Target& tar
   if (!target.source || !target.skeleton)
     throw std::invalid_argument("initial_estimate: the target has no skeleton");
   check_same_structure(*target.skeleton, *source.skeleton, "initial_estimate: the target");
-  if (!(options.smooth_seconds >= 0) || !std::isfinite(options.smooth_seconds))
-    throw std::invalid_argument("smooth_seconds must be >= 0");
+  options.validate();
 
   InitialEstimate out;
   motion::Motion scaled = scale_translation(source, target, &out.scale);

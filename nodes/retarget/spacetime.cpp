@@ -722,13 +722,13 @@ class Pass {
 // --- validation -------------------------------------------------------------------------------
 
 std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
+  problem.options.validate();
   if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
   if (problem.characters.size() > 2)
     throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
                                 " characters (at most 2 are supported)");
   if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
   if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
-  problem.options.validate();
   const int frames = problem.characters[0].initial.frame_count();
   for (std::size_t k = 0; k < problem.characters.size(); ++k) {
     const CharacterProblem& cp = problem.characters[k];
