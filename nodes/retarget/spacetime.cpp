@@ -285,84 +285,111 @@ class Pass {
     return c;
   }
 
+  // Every sample of every constraint: the (character, frame) pieces it reads and their free
+  // channels (sample_pieces), where its points' chains and its values sit among those channels
+  // (locate_channels), its rows (count_rows), its group (file_sample); then the buffers sized.
   void build_samples() {
     std::map<std::pair<int, int>, int> group_of;
-    for (std::size_t ci = 0; ci < set_.constraints.size(); ++ci) {
-      const Constraint& con = set_.constraints[ci];
-      const KindInfo& kind = kinds_[ci];
-      for (std::size_t si = 0; si < con.samples.size(); ++si) {
-        const Sample& sample = con.samples[si];
-        SampleInfo s;
-        s.constraint = static_cast<int>(ci);
-        s.sample = static_cast<int>(si);
-        s.row_offset = rows_total_;
-        s.rows = kind.rows;
-        auto piece_of = [&](int character, int frame) {
-          for (std::size_t i = 0; i < s.pieces.size(); ++i)
-            if (s.pieces[i].character == character && s.pieces[i].frame == frame) return static_cast<int>(i);
-          s.pieces.push_back({character, frame, {}, 0});
-          return static_cast<int>(s.pieces.size() - 1);
-        };
-        const std::size_t np = con.points.size();
-        for (std::size_t p = 0; p < np; ++p) {
-          const PointRef& pr = con.points[p];
-          Character& ch = chars_[static_cast<std::size_t>(pr.character)];
-          const int piece = piece_of(pr.character, sample.frames[p]);
-          s.point_piece.push_back(piece);
-          for (int c : chain(ch, pr.joint))
-            if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
-        }
-        for (std::size_t v = 0; v < con.channels.size(); ++v) {
-          const ChannelRef& cr = con.channels[v];
-          const int piece = piece_of(cr.character, sample.frames[np + v]);
-          s.value_piece.push_back(piece);
-          if (chars_[static_cast<std::size_t>(cr.character)].free[static_cast<std::size_t>(cr.channel)])
-            s.pieces[static_cast<std::size_t>(piece)].channels.push_back(cr.channel);
-        }
-        for (Piece& piece : s.pieces) {
-          std::sort(piece.channels.begin(), piece.channels.end());
-          piece.channels.erase(std::unique(piece.channels.begin(), piece.channels.end()), piece.channels.end());
-          piece.g_offset = g_size_;
-          g_size_ += static_cast<std::size_t>(s.rows) * piece.channels.size();
-        }
-        auto position = [](const Piece& piece, int c) {
-          auto it = std::lower_bound(piece.channels.begin(), piece.channels.end(), c);
-          return it != piece.channels.end() && *it == c ? static_cast<int>(it - piece.channels.begin()) : -1;
-        };
-        for (std::size_t p = 0; p < np; ++p) {
-          const PointRef& pr = con.points[p];
-          const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
-          std::vector<int> pos;
-          for (int c : chain(chars_[static_cast<std::size_t>(pr.character)], pr.joint))
-            pos.push_back(position(piece, c));
-          s.point_pos.push_back(std::move(pos));
-        }
-        for (std::size_t v = 0; v < con.channels.size(); ++v)
-          s.value_pos.push_back(
-              position(s.pieces[static_cast<std::size_t>(s.value_piece[v])], con.channels[v].channel));
-        for (int r = 0; r < s.rows; ++r) {
-          inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
-          weight_.push_back(con.weight);
-        }
-        rows_total_ += s.rows;
-        max_rows_ = std::max(max_rows_, s.rows);
-        max_points_ = std::max(max_points_, static_cast<int>(np));
-        max_values_ = std::max(max_values_, static_cast<int>(con.channels.size()));
-        const int index = static_cast<int>(samples_.size());
-        if (s.pieces.size() == 1) {
-          const auto key = std::make_pair(s.pieces[0].character, s.pieces[0].frame);
-          auto it = group_of.find(key);
-          if (it == group_of.end()) {
-            it = group_of.emplace(key, static_cast<int>(groups_.size())).first;
-            groups_.push_back({key.first, key.second, {}, {}});
-          }
-          groups_[static_cast<std::size_t>(it->second)].samples.push_back(index);
-        } else if (!s.pieces.empty()) {
-          multi_.push_back(index);
-        }
-        samples_.push_back(std::move(s));
+    for (std::size_t ci = 0; ci < set_.constraints.size(); ++ci)
+      for (std::size_t si = 0; si < set_.constraints[ci].samples.size(); ++si) {
+        SampleInfo s = sample_pieces(static_cast<int>(ci), static_cast<int>(si));
+        locate_channels(s);
+        count_rows(s);
+        file_sample(std::move(s), group_of);
       }
+    size_buffers();
+  }
+
+  SampleInfo sample_pieces(int ci, int si) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(ci)];
+    const Sample& sample = con.samples[static_cast<std::size_t>(si)];
+    SampleInfo s;
+    s.constraint = ci;
+    s.sample = si;
+    s.row_offset = rows_total_;
+    s.rows = kinds_[static_cast<std::size_t>(ci)].rows;
+    auto piece_of = [&](int character, int frame) {
+      for (std::size_t i = 0; i < s.pieces.size(); ++i)
+        if (s.pieces[i].character == character && s.pieces[i].frame == frame) return static_cast<int>(i);
+      s.pieces.push_back({character, frame, {}, 0});
+      return static_cast<int>(s.pieces.size() - 1);
+    };
+    const std::size_t np = con.points.size();
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      Character& ch = chars_[static_cast<std::size_t>(pr.character)];
+      const int piece = piece_of(pr.character, sample.frames[p]);
+      s.point_piece.push_back(piece);
+      for (int c : chain(ch, pr.joint))
+        if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
     }
+    for (std::size_t v = 0; v < con.channels.size(); ++v) {
+      const ChannelRef& cr = con.channels[v];
+      const int piece = piece_of(cr.character, sample.frames[np + v]);
+      s.value_piece.push_back(piece);
+      if (chars_[static_cast<std::size_t>(cr.character)].free[static_cast<std::size_t>(cr.channel)])
+        s.pieces[static_cast<std::size_t>(piece)].channels.push_back(cr.channel);
+    }
+    for (Piece& piece : s.pieces) {
+      std::sort(piece.channels.begin(), piece.channels.end());
+      piece.channels.erase(std::unique(piece.channels.begin(), piece.channels.end()), piece.channels.end());
+      piece.g_offset = g_size_;
+      g_size_ += static_cast<std::size_t>(s.rows) * piece.channels.size();
+    }
+    return s;
+  }
+
+  void locate_channels(SampleInfo& s) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(s.constraint)];
+    const std::size_t np = con.points.size();
+    auto position = [](const Piece& piece, int c) {
+      auto it = std::lower_bound(piece.channels.begin(), piece.channels.end(), c);
+      return it != piece.channels.end() && *it == c ? static_cast<int>(it - piece.channels.begin()) : -1;
+    };
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
+      std::vector<int> pos;
+      for (int c : chain(chars_[static_cast<std::size_t>(pr.character)], pr.joint))
+        pos.push_back(position(piece, c));
+      s.point_pos.push_back(std::move(pos));
+    }
+    for (std::size_t v = 0; v < con.channels.size(); ++v)
+      s.value_pos.push_back(
+          position(s.pieces[static_cast<std::size_t>(s.value_piece[v])], con.channels[v].channel));
+  }
+
+  void count_rows(const SampleInfo& s) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(s.constraint)];
+    const KindInfo& kind = kinds_[static_cast<std::size_t>(s.constraint)];
+    for (int r = 0; r < s.rows; ++r) {
+      inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
+      weight_.push_back(con.weight);
+    }
+    rows_total_ += s.rows;
+    max_rows_ = std::max(max_rows_, s.rows);
+    max_points_ = std::max(max_points_, static_cast<int>(con.points.size()));
+    max_values_ = std::max(max_values_, static_cast<int>(con.channels.size()));
+  }
+
+  // A single-piece sample joins the group of its (character, frame), others the multi-frame list.
+  void file_sample(SampleInfo s, std::map<std::pair<int, int>, int>& group_of) {
+    const int index = static_cast<int>(samples_.size());
+    if (s.pieces.size() == 1) {
+      const auto key = std::make_pair(s.pieces[0].character, s.pieces[0].frame);
+      auto it = group_of.find(key);
+      if (it == group_of.end()) {
+        it = group_of.emplace(key, static_cast<int>(groups_.size())).first;
+        groups_.push_back({key.first, key.second, {}, {}});
+      }
+      groups_[static_cast<std::size_t>(it->second)].samples.push_back(index);
+    } else if (!s.pieces.empty()) {
+      multi_.push_back(index);
+    }
+    samples_.push_back(std::move(s));
+  }
+
+  void size_buffers() {
     r_ = Eigen::VectorXd::Zero(rows_total_);
     g_.assign(g_size_, 0.0);
     points_.resize(static_cast<std::size_t>(max_points_));
@@ -526,9 +553,34 @@ class Pass {
     return true;
   }
 
-  // Normal equations of the active rows over the controls of the channels they touch.
+  // Normal equations of the active rows over the controls of the channels they touch: the
+  // channels (touched_channels), their controls in control-major order (order_controls), the
+  // band they need (needed_bandwidth), the per-frame blocks (frame_block, spread_frame_block),
+  // the samples reading several frames (add_rows), the damping eps M (add_damping).
   void assemble(const Eigen::VectorXd& x) {
-    // 1. Channels the active rows touch.
+    std::vector<char> touched = touched_channels();
+    // Rebuilt only when the set changes.
+    if (touched != band_channel_ || band_index_.empty()) order_controls(std::move(touched));
+    const int n = static_cast<int>(band_global_.size());
+    band_.reset(n, std::min(needed_bandwidth(), std::max(0, n - 1)));
+    grad_.setZero(n);
+    for (const Group& g : groups_) {
+      if (g.touched.empty()) continue;
+      Character& ch = chars_[static_cast<std::size_t>(g.character)];
+      frame_block(g, ch);
+      spread_frame_block(g, ch);
+    }
+    // Samples reading several frames or both characters, row blocks at once.
+    if (static_cast<int>(local_column_.size()) != n) local_column_.assign(static_cast<std::size_t>(n), -1);
+    for (int si : multi_) {
+      const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+      if (sample_active(s)) add_rows(s, [&](int row) { return active_[static_cast<std::size_t>(row)] != 0; });
+    }
+    add_damping(x);
+  }
+
+  // The channels (c_offset + c) the active rows touch; each group's own in Group::touched.
+  std::vector<char> touched_channels() {
     std::vector<char> touched(band_channel_.size(), 0);
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       Group& g = groups_[gi];
@@ -553,38 +605,44 @@ class Pass {
       for (const Piece& p : s.pieces)
         for (int c : p.channels) touched[static_cast<std::size_t>(chars_[static_cast<std::size_t>(p.character)].c_offset + c)] = 1;
     }
-    // 2. Control-major order of their unknowns (rebuilt only when the set changes).
-    if (touched != band_channel_ || band_index_.empty()) {
-      band_channel_ = touched;
-      struct Item {
-        int frame, character, channel, control;
-      };
-      std::vector<Item> items;
-      for (std::size_t k = 0; k < chars_.size(); ++k) {
-        const Character& ch = chars_[k];
-        for (int c = 0; c < ch.channels; ++c) {
-          if (!band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
-          for (int j = 0; j < ch.layout.control_count(c); ++j)
-            items.push_back({ch.layout.control_frame(c, j), static_cast<int>(k), c, j});
-        }
-      }
-      std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-        if (a.frame != b.frame) return a.frame < b.frame;
-        if (a.character != b.character) return a.character < b.character;
-        return a.channel < b.channel;
-      });
-      band_index_.assign(static_cast<std::size_t>(x_size_), -1);
-      band_global_.clear();
-      band_sensitivity_.clear();
-      for (const Item& it : items) {
-        const Character& ch = chars_[static_cast<std::size_t>(it.character)];
-        const int global = ch.x_offset + ch.layout.unknown(it.channel, it.control);
-        band_index_[static_cast<std::size_t>(global)] = static_cast<int>(band_global_.size());
-        band_global_.push_back(global);
-        band_sensitivity_.push_back(ch.sensitivity[it.channel]);
+    return touched;
+  }
+
+  // The unknowns of the touched channels in control-major order (every channel of one control
+  // time together): band_index_, band_global_ and band_sensitivity_.
+  void order_controls(std::vector<char> touched) {
+    band_channel_ = std::move(touched);
+    struct Item {
+      int frame, character, channel, control;
+    };
+    std::vector<Item> items;
+    for (std::size_t k = 0; k < chars_.size(); ++k) {
+      const Character& ch = chars_[k];
+      for (int c = 0; c < ch.channels; ++c) {
+        if (!band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
+        for (int j = 0; j < ch.layout.control_count(c); ++j)
+          items.push_back({ch.layout.control_frame(c, j), static_cast<int>(k), c, j});
       }
     }
-    // 3. Bandwidth: the widest index span of one group or one multi-frame row.
+    std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
+      if (a.frame != b.frame) return a.frame < b.frame;
+      if (a.character != b.character) return a.character < b.character;
+      return a.channel < b.channel;
+    });
+    band_index_.assign(static_cast<std::size_t>(x_size_), -1);
+    band_global_.clear();
+    band_sensitivity_.clear();
+    for (const Item& it : items) {
+      const Character& ch = chars_[static_cast<std::size_t>(it.character)];
+      const int global = ch.x_offset + ch.layout.unknown(it.channel, it.control);
+      band_index_[static_cast<std::size_t>(global)] = static_cast<int>(band_global_.size());
+      band_global_.push_back(global);
+      band_sensitivity_.push_back(ch.sensitivity[it.channel]);
+    }
+  }
+
+  // Bandwidth: the widest index span of one group or one multi-frame row.
+  int needed_bandwidth() const {
     int b = 0;
     for (const Group& g : groups_) {
       if (g.touched.empty()) continue;
@@ -611,67 +669,66 @@ class Pass {
       }
       if (hi >= 0) b = std::max(b, hi - lo);
     }
-    const int n = static_cast<int>(band_global_.size());
-    band_.reset(n, std::min(b, std::max(0, n - 1)));
-    grad_.setZero(n);
+    return b;
+  }
 
-    // 4. Per-frame blocks: rows of one (character, frame) in channel space, then spread over the
-    //    4 controls per channel that frame weighs.
-    for (const Group& g : groups_) {
-      if (g.touched.empty()) continue;
-      Character& ch = chars_[static_cast<std::size_t>(g.character)];
-      for (int si : g.samples) {
-        const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
-        if (!sample_active(s)) continue;
-        const Piece& piece = s.pieces[0];
-        const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
-        const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
-                                                  static_cast<Eigen::Index>(piece.channels.size()));
-        const int m = static_cast<int>(piece.channels.size());
-        for (int r = 0; r < s.rows; ++r) {
-          if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
-          const double wr = w * w * rho(s.row_offset + r);
-          for (int i = 0; i < m; ++i) {
-            const int ci = piece.channels[static_cast<std::size_t>(i)];
-            const double gi = G(r, i);
-            if (gi == 0) continue;
-            ch.gradient[ci] += gi * wr;
-            const double wgi = w * w * gi;
-            for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
-          }
-        }
-      }
-      int ia[4], ib[4];
-      for (int a : g.touched) {
-        const motion::BasisAt& ba = ch.layout.basis(a, g.frame);
-        for (int p = 0; p < 4; ++p) {
-          ia[p] = band_index(ch, a, ba.first + p);
-          grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
-        }
-        for (int bc : g.touched) {
-          const double nab = ch.normal(a, bc);
-          if (nab == 0) continue;
-          const motion::BasisAt& bb = ch.layout.basis(bc, g.frame);
-          for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
-          for (int p = 0; p < 4; ++p) {
-            const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
-            for (int q = 0; q < 4; ++q)
-              if (ia[p] >= ib[q]) band_.at(ia[p], ib[q]) += wp * bb.weight[static_cast<std::size_t>(q)];
-          }
-        }
-      }
-      for (int a : g.touched) {
-        ch.gradient[a] = 0;
-        for (int bc : g.touched) ch.normal(a, bc) = 0;
-      }
-    }
-    // 5. Samples reading several frames or both characters, row blocks at once.
-    if (static_cast<int>(local_column_.size()) != n) local_column_.assign(static_cast<std::size_t>(n), -1);
-    for (int si : multi_) {
+  // Rows of one (character, frame) in channel space: J^T J and J^T rho into the character's
+  // normal and gradient scratch.
+  void frame_block(const Group& g, Character& ch) {
+    for (int si : g.samples) {
       const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
-      if (sample_active(s)) add_rows(s, [&](int row) { return active_[static_cast<std::size_t>(row)] != 0; });
+      if (!sample_active(s)) continue;
+      const Piece& piece = s.pieces[0];
+      const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+      const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
+                                                static_cast<Eigen::Index>(piece.channels.size()));
+      const int m = static_cast<int>(piece.channels.size());
+      for (int r = 0; r < s.rows; ++r) {
+        if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
+        const double wr = w * w * rho(s.row_offset + r);
+        for (int i = 0; i < m; ++i) {
+          const int ci = piece.channels[static_cast<std::size_t>(i)];
+          const double gi = G(r, i);
+          if (gi == 0) continue;
+          ch.gradient[ci] += gi * wr;
+          const double wgi = w * w * gi;
+          for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
+        }
+      }
     }
-    // 6. Damping.
+  }
+
+  // The frame's block spread over the 4 controls per channel that frame weighs, and the scratch
+  // cleared.
+  void spread_frame_block(const Group& g, Character& ch) {
+    int ia[4], ib[4];
+    for (int a : g.touched) {
+      const motion::BasisAt& ba = ch.layout.basis(a, g.frame);
+      for (int p = 0; p < 4; ++p) {
+        ia[p] = band_index(ch, a, ba.first + p);
+        grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
+      }
+      for (int bc : g.touched) {
+        const double nab = ch.normal(a, bc);
+        if (nab == 0) continue;
+        const motion::BasisAt& bb = ch.layout.basis(bc, g.frame);
+        for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
+        for (int p = 0; p < 4; ++p) {
+          const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
+          for (int q = 0; q < 4; ++q)
+            if (ia[p] >= ib[q]) band_.at(ia[p], ib[q]) += wp * bb.weight[static_cast<std::size_t>(q)];
+        }
+      }
+    }
+    for (int a : g.touched) {
+      ch.gradient[a] = 0;
+      for (int bc : g.touched) ch.normal(a, bc) = 0;
+    }
+  }
+
+  // Damping: eps M on the diagonal, eps M x in the gradient.
+  void add_damping(const Eigen::VectorXd& x) {
+    const int n = static_cast<int>(band_global_.size());
     for (int i = 0; i < n; ++i) {
       const double em = options_.epsilon * band_sensitivity_[static_cast<std::size_t>(i)];
       band_.at(i, i) += em;
@@ -721,14 +778,9 @@ class Pass {
 
 // --- validation -------------------------------------------------------------------------------
 
-std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
-  problem.options.validate();
-  if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
-  if (problem.characters.size() > 2)
-    throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
-                                " characters (at most 2 are supported)");
-  if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
-  if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
+// Each character against character 0 (frames, rate) and its own skeleton (key spacings, frozen
+// flags, per-frame skeletons).
+void check_characters(const SpacetimeProblem& problem) {
   const int frames = problem.characters[0].initial.frame_count();
   for (std::size_t k = 0; k < problem.characters.size(); ++k) {
     const CharacterProblem& cp = problem.characters[k];
@@ -765,52 +817,66 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
           throw std::invalid_argument(who + "a per-frame skeleton differs in structure from the motion's");
     }
   }
-  const ConstraintSet& set = *problem.constraints;
-  std::vector<KindInfo> kinds;
-  for (const Constraint& c : set.constraints) {
-    KindInfo info;
-    info.kind = problem.kinds(c.kind);
-    if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
-    info.kind->check(c);
-    info.rows = info.kind->rows(c);
-    if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
-    for (int r = 0; r < info.rows; ++r) info.inequality.push_back(info.kind->is_inequality(c, r) ? 1 : 0);
-    if (!(c.weight > 0) || !std::isfinite(c.weight))
-      throw std::invalid_argument(label_of(c) + ": weight " + std::to_string(c.weight) + " (expected > 0)");
-    const int nchar = static_cast<int>(problem.characters.size());
-    for (const PointRef& p : c.points) {
-      if (p.character < 0 || p.character >= nchar)
-        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(p.character) +
-                                    " but the problem has " + std::to_string(nchar));
-      const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
-      if (p.joint < 0 || p.joint >= s.joint_count())
-        throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
-                                    std::to_string(s.joint_count()) + " joints)");
-      if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
-    }
-    if (const std::string problem = sample_locals_problem(c); !problem.empty())
-      throw std::invalid_argument(label_of(c) + ": " + problem);
-    for (const ChannelRef& ch : c.channels) {
-      if (ch.character < 0 || ch.character >= nchar)
-        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +
-                                    " but the problem has " + std::to_string(nchar));
-      const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
-      if (ch.channel < 0 || ch.channel >= s.channel_count())
-        throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
-                                    std::to_string(s.channel_count()) + " channels)");
-    }
-    const std::size_t want = c.points.size() + c.channels.size();
-    for (const Sample& sm : c.samples) {
-      if (sm.frames.size() != want)
-        throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
-                                    " frames, expected " + std::to_string(want) + " (one per point and channel)");
-      for (int f : sm.frames)
-        if (f < 0 || f >= frames)
-          throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
-                                      std::to_string(frames - 1) + "]");
-    }
-    kinds.push_back(std::move(info));
+}
+
+// One constraint against its kind and the problem's characters; its rows.
+KindInfo check_constraint(const SpacetimeProblem& problem, const Constraint& c, int frames) {
+  KindInfo info;
+  info.kind = problem.kinds(c.kind);
+  if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
+  info.kind->check(c);
+  info.rows = info.kind->rows(c);
+  if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
+  for (int r = 0; r < info.rows; ++r) info.inequality.push_back(info.kind->is_inequality(c, r) ? 1 : 0);
+  if (!(c.weight > 0) || !std::isfinite(c.weight))
+    throw std::invalid_argument(label_of(c) + ": weight " + std::to_string(c.weight) + " (expected > 0)");
+  const int nchar = static_cast<int>(problem.characters.size());
+  for (const PointRef& p : c.points) {
+    if (p.character < 0 || p.character >= nchar)
+      throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(p.character) +
+                                  " but the problem has " + std::to_string(nchar));
+    const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
+    if (p.joint < 0 || p.joint >= s.joint_count())
+      throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
+                                  std::to_string(s.joint_count()) + " joints)");
+    if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
   }
+  if (const std::string problem = sample_locals_problem(c); !problem.empty())
+    throw std::invalid_argument(label_of(c) + ": " + problem);
+  for (const ChannelRef& ch : c.channels) {
+    if (ch.character < 0 || ch.character >= nchar)
+      throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +
+                                  " but the problem has " + std::to_string(nchar));
+    const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
+    if (ch.channel < 0 || ch.channel >= s.channel_count())
+      throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
+                                  std::to_string(s.channel_count()) + " channels)");
+  }
+  const std::size_t want = c.points.size() + c.channels.size();
+  for (const Sample& sm : c.samples) {
+    if (sm.frames.size() != want)
+      throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
+                                  " frames, expected " + std::to_string(want) + " (one per point and channel)");
+    for (int f : sm.frames)
+      if (f < 0 || f >= frames)
+        throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
+                                    std::to_string(frames - 1) + "]");
+  }
+  return info;
+}
+
+std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
+  problem.options.validate();
+  if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
+  if (problem.characters.size() > 2)
+    throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
+                                " characters (at most 2 are supported)");
+  if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
+  if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
+  check_characters(problem);
+  const int frames = problem.characters[0].initial.frame_count();
+  std::vector<KindInfo> kinds;
+  for (const Constraint& c : problem.constraints->constraints) kinds.push_back(check_constraint(problem, c, frames));
   return kinds;
 }
 
