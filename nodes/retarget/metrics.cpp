@@ -360,16 +360,9 @@ void write_band(kg::JsonWriter& w, const BandEnergy& b) {
   w.field("channels", b.channels);
   w.end_object();
 }
-}  // namespace
 
-void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
-  kg::JsonWriter w(os);
-  w.begin_object();
-  w.field("version", 1);
-  w.field("motion", m.motion_name);
-  w.field("frames", m.frames);
-  w.field("fps", m.fps);
-
+// "violation": the worst violation and each kind's figures.
+void write_violations(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("violation");
   w.begin_object();
   w.field("worst_cm", 100 * m.worst_violation_metres);
@@ -392,6 +385,10 @@ void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
   w.end_array();
   w.end_object();
 
+}
+
+// "foot_skate_cm": the plants' travel.
+void write_skate(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("foot_skate_cm");
   w.begin_object();
   w.field("worst", 100 * m.skate.worst);
@@ -412,6 +409,10 @@ void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
   w.end_array();
   w.end_object();
 
+}
+
+// "jerk": of the result, the source, their difference and the displacement.
+void write_jerks(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("jerk");
   w.begin_object();
   w.key("result");
@@ -437,6 +438,10 @@ void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
     w.null();
   w.end_object();
 
+}
+
+// "energy_above_cutoff": the pyramid's band energy above the key spacing's cutoff, or null.
+void write_energy(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("energy_above_cutoff");
   if (m.energy) {
     w.begin_object();
@@ -451,6 +456,21 @@ void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
   } else {
     w.null();
   }
+}
+
+}  // namespace
+
+void write_metrics_json(std::ostream& os, const RetargetMetrics& m) {
+  kg::JsonWriter w(os);
+  w.begin_object();
+  w.field("version", 1);
+  w.field("motion", m.motion_name);
+  w.field("frames", m.frames);
+  w.field("fps", m.fps);
+  write_violations(w, m);
+  write_skate(w, m);
+  write_jerks(w, m);
+  write_energy(w, m);
   w.field("solve_seconds", m.solve_seconds);
   w.end_object();
   os << '\n';
