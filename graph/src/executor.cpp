@@ -139,6 +139,7 @@ std::string node_key(const NodeInstance& node, const NodeType* type, const std::
 }  // namespace
 
 RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options) {
+  options.validate();
   const auto t0 = Clock::now();
   const std::size_t n = graph.nodes.size();
 

@@ -53,6 +53,7 @@ class ExportNode final : public graph::Node {
       : format_(std::move(format)), path_(p.get<std::string>("path")) {
     options_.units = p.get<std::string>("units");
     options_.precision = static_cast<int>(p.get<std::int64_t>("precision"));
+    options_.validate();  // a bad setting fails when the graph loads
   }
 
   void run(graph::RunContext& ctx) const override {

@@ -8,6 +8,7 @@
 #include <stdexcept>
 
 #include "kg/io/bvh.hpp"
+#include "kg/base/option_check.hpp"
 #include "kg/motion/rotations.hpp"
 
 namespace kg::io {
@@ -236,10 +237,15 @@ class Writer {
 
 }  // namespace
 
+void BvhWriteOptions::validate() const {
+  using options::require;
+  const char* o = "BvhWriteOptions";
+  require(units == "source" || known_unit(units), o, "units", units, "source, m, cm, mm, inch or asf");
+  require(precision >= 1 && precision <= 12, o, "precision", precision, "1 to 12 digits after the decimal point");
+}
+
 std::string write_bvh_string(const motion::Motion& motion, const BvhWriteOptions& options) {
-  if (options.precision < 1 || options.precision > 12)
-    throw std::invalid_argument("BVH precision must be 1..12 decimals, got " +
-                                std::to_string(options.precision));
+  options.validate();
   if (!motion.skeleton) throw std::invalid_argument("BVH writer: motion has no skeleton");
   motion.check();
   if (motion.skeleton->joint_count() == 0)

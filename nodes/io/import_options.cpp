@@ -1,4 +1,5 @@
 #include "kg/io/import_options.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -93,11 +94,6 @@ Extent frame_extent(const motion::Motion& m, int frame) {
   return e;
 }
 
-void check_units_name(const std::string& units, bool allow_auto) {
-  if (allow_auto && units == "auto") return;
-  metres_per_unit(units);
-}
-
 }  // namespace
 
 double metres_per_unit(const std::string& units) {
@@ -118,14 +114,24 @@ std::string up_axis_name(const Eigen::Matrix3d& file_to_world) {
   return "custom";
 }
 
+bool known_unit(const std::string& units) {
+  for (const NamedUnit& u : kUnits)
+    if (units == u.name) return true;
+  return false;
+}
+
+void ImportOptions::validate() const {
+  using options::require;
+  const char* o = "ImportOptions";
+  require(units == "auto" || known_unit(units), o, "units", units, "auto, m, cm, mm, inch or asf");
+  require(up == "auto" || up == "y" || up == "z", o, "up", up, "auto, y or z");
+  require(options::non_negative(fps), o, "fps", fps, ">= 0 and finite (frames per second; 0 keeps the file's)");
+}
+
 std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOptions& options,
                                               double file_fps, const std::string& file_name,
                                               double declared_metres_per_unit) {
-  check_units_name(options.units, true);
-  if (options.up != "auto" && options.up != "y" && options.up != "z")
-    throw std::invalid_argument("unknown up axis '" + options.up + "' (expected auto, y or z)");
-  if (!(options.fps >= 0) || !std::isfinite(options.fps))
-    throw std::invalid_argument("fps must be >= 0 (0 keeps the file's), got " + fmt("%g", options.fps));
+  options.validate();
   if (options.fps == 0 && !(file_fps > 0 && std::isfinite(file_fps)))
     throw std::invalid_argument(file_name + ": the file gives no frame rate; set fps");
   if (!m.skeleton) throw std::invalid_argument(file_name + ": motion has no skeleton");

@@ -30,6 +30,7 @@ ImportOptions import_options_from(const graph::Params& params) {
   o.units = params.get<std::string>("units");
   o.up = params.get<std::string>("up");
   o.fps = params.get<double>("fps");
+  o.validate();  // node factories call this: a bad setting fails when the graph loads
   return o;
 }
 

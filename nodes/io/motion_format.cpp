@@ -1,5 +1,6 @@
 // The built-in motion formats and the dispatch by file extension (motion_format.hpp).
 #include "kg/io/motion_format.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <filesystem>
@@ -47,7 +48,19 @@ ImportedMotion read_amc_file(const std::string& path, const std::string& skeleto
   return out;
 }
 
+}  // namespace
+
+void MotionWriteOptions::validate() const {
+  using options::require;
+  const char* o = "MotionWriteOptions";
+  require(units == "source" || known_unit(units), o, "units", units, "source, m, cm, mm, inch or asf");
+  require(precision >= 1 && precision <= 12, o, "precision", precision, "1 to 12 digits after the decimal point");
+}
+
+namespace {
+
 void write_bvh_file(std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
+  options.validate();
   write_bvh(os, motion, BvhWriteOptions{.units = options.units, .precision = options.precision});
 }
 

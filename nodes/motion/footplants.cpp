@@ -1,5 +1,6 @@
 // Footplant detection (footplants.hpp).
 #include "kg/motion/footplants.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -135,21 +136,26 @@ int FootplantDetection::count(int point) const {
   return static_cast<int>(std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
 }
 
+void FootplantOptions::validate() const {
+  using options::require;
+  const char* o = "FootplantOptions";
+  require(options::positive(height_threshold), o, "height_threshold", height_threshold, "> 0 and finite (metres)");
+  require(options::positive(speed_threshold), o, "speed_threshold", speed_threshold, "> 0 and finite (m/s)");
+  require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis,
+          ">= 1 and finite (leave thresholds = enter thresholds x hysteresis)");
+  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s, ">= 0 and finite (seconds)");
+  require(min_duration_frames >= 1, o, "min_duration_frames", min_duration_frames, ">= 1");
+  require(!std::isinf(floor), o, "floor", floor, "a finite height (metres), or NaN: estimated");
+  require(floor_percentile >= 0 && floor_percentile <= 0.5, o, "floor_percentile", floor_percentile, "in [0, 0.5]");
+  require(options::non_negative(trim_distance), o, "trim_distance", trim_distance,
+          ">= 0 and finite (metres; 0: no trimming)");
+  require(options::non_negative(rest_window_s), o, "rest_window_s", rest_window_s, ">= 0 and finite (seconds)");
+  require(character >= 0, o, "character", character, ">= 0");
+}
+
 FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o) {
   if (!m.skeleton) throw std::invalid_argument("footplants: the motion has no skeleton");
-  if (!(o.height_threshold > 0) || !(o.speed_threshold > 0))
-    throw std::invalid_argument("footplants: height and speed thresholds must be positive");
-  if (!(o.hysteresis >= 1) || !std::isfinite(o.hysteresis))
-    throw std::invalid_argument("footplants: hysteresis must be >= 1 (leave thresholds = enter * hysteresis)");
-  if (!(o.floor_percentile >= 0 && o.floor_percentile <= 0.5))
-    throw std::invalid_argument("footplants: floor_percentile must be in [0, 0.5]");
-  if (!(o.min_duration_s >= 0) || o.min_duration_frames < 1)
-    throw std::invalid_argument("footplants: minimum duration must be >= 0 s and >= 1 frame");
-  if (!(o.rest_window_s >= 0) || !std::isfinite(o.rest_window_s))
-    throw std::invalid_argument("footplants: rest_window_s must be >= 0 s");
-  if (!(o.trim_distance >= 0) || !std::isfinite(o.trim_distance))
-    throw std::invalid_argument("footplants: trim_distance must be >= 0 m");
-  if (std::isinf(o.floor)) throw std::invalid_argument("footplants: the floor height is infinite");
+  o.validate();
   const Skeleton& sk = *m.skeleton;
   FootplantDetection d;
   if (o.points.empty())

@@ -62,6 +62,8 @@ class FootplantsNode final : public Node {
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
                                                              : retarget::PlantFlavour::Fixed;
     make_.above_floor = p.get<bool>("above_floor");
+    detect_.validate();  // a bad setting fails when the graph loads
+    make_.validate();
   }
 
   void run(RunContext& ctx) const override {
@@ -91,29 +93,14 @@ class FootplantsNode final : public Node {
   retarget::PlantConstraintOptions make_;
 };
 
-NodeType footplants_type() {
-  NodeSpec spec;
-  spec.type = "retarget.footplants";
-  spec.doc =
-      "Detects footplants (Gleicher 1998 §3.5): spans where a foot point is near the floor and nearly still "
-      "(height and horizontal-speed thresholds with hysteresis, a minimum duration), and emits them as "
-      "constraints: fixed (the plant's mean position, all axes) or floor (its height only, plus non-skid "
-      "same_place between consecutive frames: the solver may move the plant). With above_floor, every foot "
-      "point "
-      "stays above the floor (an estimated floor never lifts a point above where the source had it). With a "
-      "target connected, heights above the floor are scaled to its size.";
-  spec.inputs = {
-      {"motion", "kg.Motion", true, "the source clip the plants are read from"},
-      {"target", "kg.Target", false,
-       "the character the plants are for (of `character`): heights above the floor scale with its feet (a "
-       "smaller foot rests lower); horizontal positions stay the source's"}};
-  spec.outputs = {kConstraintsOut};
+// The params of retarget.footplants: motion::FootplantOptions and retarget::PlantConstraintOptions.
+std::vector<ParamSpec> footplants_params() {
   ParamSpec flavour = ParamSpec{.name = "flavour",
                                 .type = ParamType::Enum,
                                 .default_value = std::string("fixed"),
                                 .doc = "fixed: plant positions kept; floor: height plus non-skid only"};
   flavour.choices = {"fixed", "floor"};
-  spec.params = {
+  return {
       ParamSpec{.name = "points",
                 .type = ParamType::String,
                 .default_value = std::string(),
@@ -177,6 +164,26 @@ NodeType footplants_type() {
                 .min = 0.0,
                 .max = 1.0},
   };
+}
+
+NodeType footplants_type() {
+  NodeSpec spec;
+  spec.type = "retarget.footplants";
+  spec.doc =
+      "Detects footplants (Gleicher 1998 §3.5): spans where a foot point is near the floor and nearly still "
+      "(height and horizontal-speed thresholds with hysteresis, a minimum duration), and emits them as "
+      "constraints: fixed (the plant's mean position, all axes) or floor (its height only, plus non-skid "
+      "same_place between consecutive frames: the solver may move the plant). With above_floor, every foot "
+      "point "
+      "stays above the floor (an estimated floor never lifts a point above where the source had it). With a "
+      "target connected, heights above the floor are scaled to its size.";
+  spec.inputs = {
+      {"motion", "kg.Motion", true, "the source clip the plants are read from"},
+      {"target", "kg.Target", false,
+       "the character the plants are for (of `character`): heights above the floor scale with its feet (a "
+       "smaller foot rests lower); horizontal positions stay the source's"}};
+  spec.outputs = {kConstraintsOut};
+  spec.params = footplants_params();
   return {spec, [](const Params& p) { return std::make_unique<FootplantsNode>(p); }};
 }
 
@@ -243,6 +250,7 @@ class HoldsNode final : public Node {
     options_.max_distance = p.get<double>("max_distance");
     options_.hysteresis = p.get<double>("hysteresis");
     options_.min_duration_s = p.get<double>("min_duration_s");
+    options_.validate();  // a bad setting fails when the graph loads
   }
 
   void run(RunContext& ctx) const override {

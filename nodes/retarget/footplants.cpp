@@ -1,5 +1,6 @@
 // Footplant constraints (footplants.hpp): detected plants as fixed or floor constraints.
 #include "kg/retarget/footplants.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -23,8 +24,12 @@ const char* to_string(PlantFlavour flavour) {
   return flavour == PlantFlavour::Fixed ? "fixed" : "floor";
 }
 
+void PlantConstraintOptions::validate() const {
+  options::require(options::positive(weight), "PlantConstraintOptions", "weight", weight, "> 0 and finite");
+}
+
 ConstraintSet footplant_constraints(const motion::FootplantDetection& d, int frames, const PlantConstraintOptions& o) {
-  if (!(o.weight > 0)) throw std::invalid_argument("footplant constraints: weight must be positive");
+  o.validate();
   auto scale_at = [&](const PointRef& point, int f) {
     if (!o.height_scale) return 1.0;
     const double s = o.height_scale(point, f);

@@ -1,5 +1,6 @@
 // Holds between two characters (holds.hpp).
 #include "kg/retarget/holds.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <cmath>
 #include <limits>
@@ -7,6 +8,16 @@
 
 
 namespace kg::retarget {
+
+void HoldOptions::validate() const {
+  using options::require;
+  const char* o = "HoldOptions";
+  require(!points_a.empty(), o, "points_a", points_a, "at least one point (of character 0)");
+  require(!points_b.empty(), o, "points_b", points_b, "at least one point (of character 1)");
+  require(options::positive(max_distance), o, "max_distance", max_distance, "> 0 and finite (metres)");
+  require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis, ">= 1 and finite");
+  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s, ">= 0 and finite (seconds)");
+}
 
 HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, const HoldOptions& o) {
   if (!a.skeleton || !b.skeleton) throw std::invalid_argument("holds: a motion has no skeleton");
@@ -16,14 +27,7 @@ HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, con
     throw std::invalid_argument("holds: the two motions differ in length or rate (" + std::to_string(a.frame_count()) +
                                 " frames at " + std::to_string(a.fps) + " Hz, " + std::to_string(b.frame_count()) +
                                 " at " + std::to_string(b.fps) + " Hz): resample them alike");
-  if (o.points_a.empty() || o.points_b.empty())
-    throw std::invalid_argument("holds: name at least one point on each character");
-  if (!(o.max_distance > 0) || !std::isfinite(o.max_distance))
-    throw std::invalid_argument("holds: max_distance must be positive");
-  if (!(o.hysteresis >= 1) || !std::isfinite(o.hysteresis))
-    throw std::invalid_argument("holds: hysteresis must be >= 1");
-  if (!(o.min_duration_s >= 0) || !std::isfinite(o.min_duration_s))
-    throw std::invalid_argument("holds: min_duration_s must be >= 0");
+  o.validate();
   HoldDetection d;
   for (const std::string& spec : o.points_a) d.points_a.push_back(motion::find_point(*a.skeleton, spec, 0, "holds"));
   for (const std::string& spec : o.points_b) d.points_b.push_back(motion::find_point(*b.skeleton, spec, 1, "holds"));

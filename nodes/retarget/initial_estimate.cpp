@@ -1,5 +1,6 @@
 // The initial estimate m1 (§3.8, step 2 of §4); see initial_estimate.hpp for each step.
 #include "kg/retarget/initial_estimate.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -75,18 +76,96 @@ motion::Motion scale_translation(const motion::Motion& source, const Target& tar
   return out;
 }
 
+namespace {
+
+// Per frame and axis: sums and counts of the equality rows' displacements, and the violated
+// inequality rows' pushes (largest positive, most negative, sum, count).
+struct Displacements {
+  explicit Displacements(int frames)
+      : eq_sum(Eigen::MatrixXd::Zero(frames, 3)),
+        eq_n(Eigen::MatrixXd::Zero(frames, 3)),
+        in_max(Eigen::MatrixXd::Zero(frames, 3)),
+        in_min(Eigen::MatrixXd::Zero(frames, 3)),
+        in_sum(Eigen::MatrixXd::Zero(frames, 3)),
+        in_n(Eigen::MatrixXd::Zero(frames, 3)) {}
+
+  // The rows of one sample at frame f (residuals r, d r / d points dp): each row fixing a
+  // single world axis gives the displacement along it that meets the row.
+  void add_rows(const Constraint& c, const ConstraintKind& kind, int f, const Eigen::VectorXd& r,
+                const Eigen::MatrixXd& dp) {
+    for (Eigen::Index i = 0; i < r.size(); ++i) {
+      Eigen::Vector3d g = Eigen::Vector3d::Zero();
+      for (std::size_t p = 0; p < c.points.size(); ++p)
+        g += dp.block<1, 3>(i, 3 * static_cast<Eigen::Index>(p)).transpose();
+      const int a = single_axis(g);
+      if (a < 0 || !std::isfinite(r[i])) {
+        ++ignored;
+        continue;
+      }
+      const double d = -r[i] / g[a];
+      if (!kind.is_inequality(c, static_cast<int>(i))) {
+        eq_sum(f, a) += d;
+        eq_n(f, a) += 1;
+        ++used;
+      } else if (r[i] < 0) {
+        in_max(f, a) = std::max(in_max(f, a), d);
+        in_min(f, a) = std::min(in_min(f, a), d);
+        in_sum(f, a) += d;
+        in_n(f, a) += 1;
+        ++used;
+      }
+    }
+  }
+
+  // Per frame and axis: the equality rows' mean, else the pushes (of one sign: the largest
+  // satisfies them all; of both signs: their mean), else NaN.
+  Eigen::MatrixXd resolve() const {
+    const Eigen::Index frames = eq_sum.rows();
+    Eigen::MatrixXd out = Eigen::MatrixXd::Constant(frames, 3, kNaN);
+    for (Eigen::Index f = 0; f < frames; ++f)
+      for (int a = 0; a < 3; ++a) {
+        if (eq_n(f, a) > 0) {
+          out(f, a) = eq_sum(f, a) / eq_n(f, a);
+        } else if (in_n(f, a) > 0) {
+          if (in_min(f, a) >= 0)
+            out(f, a) = in_max(f, a);
+          else if (in_max(f, a) <= 0)
+            out(f, a) = in_min(f, a);
+          else
+            out(f, a) = in_sum(f, a) / in_n(f, a);
+        }
+      }
+    return out;
+  }
+
+  Eigen::MatrixXd eq_sum, eq_n, in_max, in_min, in_sum, in_n;
+  int used = 0, ignored = 0;
+};
+
+// The sample's frames checked against the motion; whether they are one instant.
+bool one_instant(const Constraint& c, const Sample& sample, int frames) {
+  if (sample.frames.size() != c.points.size())
+    throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sample.frames.size()) +
+                                " frames for " + std::to_string(c.points.size()) + " points");
+  const int f = sample.frames.front();
+  bool one = true;
+  for (int sf : sample.frames) {
+    if (sf < 0 || sf >= frames)
+      throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(sf) + " outside the motion (0.." +
+                                  std::to_string(frames - 1) + ")");
+    one = one && sf == f;
+  }
+  return one;
+}
+
+}  // namespace
+
 Eigen::MatrixXd constraint_displacements(const motion::Motion& scaled, const Target& target,
                                          const ConstraintSet& constraints, const KindFinder& kinds,
                                          int* rows_used, int* rows_ignored) {
   const int frames = scaled.frame_count();
-  const motion::Skeleton& src = *scaled.skeleton;
-  const int joints = src.joint_count();
-  // Per frame and axis: sums and counts of equality displacements, and the violated
-  // inequality pushes (largest positive, most negative, sum, count).
-  Eigen::MatrixXd eq_sum = Eigen::MatrixXd::Zero(frames, 3), eq_n = Eigen::MatrixXd::Zero(frames, 3);
-  Eigen::MatrixXd in_max = Eigen::MatrixXd::Zero(frames, 3), in_min = Eigen::MatrixXd::Zero(frames, 3);
-  Eigen::MatrixXd in_sum = Eigen::MatrixXd::Zero(frames, 3), in_n = Eigen::MatrixXd::Zero(frames, 3);
-  int used = 0, ignored = 0;
+  const int joints = scaled.skeleton->joint_count();
+  Displacements acc(frames);
 
   // FK of the frames constraints read, on the target (per frame when morphing), computed once.
   std::vector<std::vector<Eigen::Isometry3d>> world(static_cast<std::size_t>(frames));
@@ -113,7 +192,7 @@ Eigen::MatrixXd constraint_displacements(const motion::Motion& scaled, const Tar
     for (const PointRef& p : c.points) other_character = other_character || p.character != 0;
     const int rows = kind->rows(c);
     if (other_character || c.points.empty()) {
-      ignored += rows * static_cast<int>(c.samples.size());
+      acc.ignored += rows * static_cast<int>(c.samples.size());
       continue;
     }
     for (const PointRef& p : c.points)
@@ -124,21 +203,11 @@ Eigen::MatrixXd constraint_displacements(const motion::Motion& scaled, const Tar
     dp.resize(rows, 3 * static_cast<Eigen::Index>(c.points.size()));
     dv.resize(rows, 0);
     for (const Sample& sample : c.samples) {
-      if (sample.frames.size() != c.points.size())
-        throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sample.frames.size()) +
-                                    " frames for " + std::to_string(c.points.size()) + " points");
-      const int f = sample.frames.front();
-      bool one_instant = true;
-      for (int sf : sample.frames) {
-        if (sf < 0 || sf >= frames)
-          throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(sf) +
-                                      " outside the motion (0.." + std::to_string(frames - 1) + ")");
-        one_instant = one_instant && sf == f;
-      }
-      if (!one_instant) {
-        ignored += rows;
+      if (!one_instant(c, sample, frames)) {
+        acc.ignored += rows;
         continue;
       }
+      const int f = sample.frames.front();
       const std::vector<Eigen::Isometry3d>& w = pose(f);
       points.clear();
       for (std::size_t i = 0; i < c.points.size(); ++i) {
@@ -149,48 +218,12 @@ Eigen::MatrixXd constraint_displacements(const motion::Motion& scaled, const Tar
       r.setZero();
       dp.setZero();
       kind->evaluate(c, params, points, values, r, dp, dv);
-      for (int i = 0; i < rows; ++i) {
-        Eigen::Vector3d g = Eigen::Vector3d::Zero();
-        for (std::size_t p = 0; p < c.points.size(); ++p)
-          g += dp.block<1, 3>(i, 3 * static_cast<Eigen::Index>(p)).transpose();
-        const int a = single_axis(g);
-        if (a < 0 || !std::isfinite(r[i])) {
-          ++ignored;
-          continue;
-        }
-        const double d = -r[i] / g[a];
-        if (!kind->is_inequality(c, i)) {
-          eq_sum(f, a) += d;
-          eq_n(f, a) += 1;
-          ++used;
-        } else if (r[i] < 0) {
-          in_max(f, a) = std::max(in_max(f, a), d);
-          in_min(f, a) = std::min(in_min(f, a), d);
-          in_sum(f, a) += d;
-          in_n(f, a) += 1;
-          ++used;
-        }
-      }
+      acc.add_rows(c, *kind, f, r, dp);
     }
   }
-  Eigen::MatrixXd out = Eigen::MatrixXd::Constant(frames, 3, kNaN);
-  for (int f = 0; f < frames; ++f)
-    for (int a = 0; a < 3; ++a) {
-      if (eq_n(f, a) > 0) {
-        out(f, a) = eq_sum(f, a) / eq_n(f, a);
-      } else if (in_n(f, a) > 0) {
-        // Pushes of one sign: the largest satisfies them all; of both signs: their mean.
-        if (in_min(f, a) >= 0)
-          out(f, a) = in_max(f, a);
-        else if (in_max(f, a) <= 0)
-          out(f, a) = in_min(f, a);
-        else
-          out(f, a) = in_sum(f, a) / in_n(f, a);
-      }
-    }
-  if (rows_used != nullptr) *rows_used = used;
-  if (rows_ignored != nullptr) *rows_ignored = ignored;
-  return out;
+  if (rows_used != nullptr) *rows_used = acc.used;
+  if (rows_ignored != nullptr) *rows_ignored = acc.ignored;
+  return acc.resolve();
 }
 
 Eigen::MatrixXd fill_gaps(const Eigen::MatrixXd& raw) {
@@ -243,6 +276,11 @@ Eigen::MatrixXd smooth_zero_phase(const Eigen::MatrixXd& x, double sigma) {
   return out;
 }
 
+void InitialEstimateOptions::validate() const {
+  options::require(options::non_negative(smooth_seconds), "InitialEstimateOptions", "smooth_seconds", smooth_seconds,
+                   ">= 0 and finite (seconds; 0: no smoothing)");
+}
+
 InitialEstimate initial_estimate(const motion::Motion& source, const Target& target,
                                  const ConstraintSet* constraints, const KindFinder& kinds,
                                  const InitialEstimateOptions& options) {
@@ -250,8 +288,7 @@ InitialEstimate initial_estimate(const motion::Motion& source, const Target& tar
   if (!target.source || !target.skeleton)
     throw std::invalid_argument("initial_estimate: the target has no skeleton");
   check_same_structure(*target.skeleton, *source.skeleton, "initial_estimate: the target");
-  if (!(options.smooth_seconds >= 0) || !std::isfinite(options.smooth_seconds))
-    throw std::invalid_argument("smooth_seconds must be >= 0");
+  options.validate();
 
   InitialEstimate out;
   motion::Motion scaled = scale_translation(source, target, &out.scale);

@@ -1,5 +1,6 @@
 // Key spacing from a band-pass pyramid (§3.7); see key_spacing.hpp for the exact rule.
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -154,15 +155,22 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text) {
   return groups;
 }
 
+void KeySpacingOptions::validate() const {
+  using options::require;
+  const char* o = "KeySpacingOptions";
+  require(threshold > 0 && threshold < 1, o, "threshold", threshold, "a fraction of the band energy in (0, 1)");
+  require(spacing >= 0, o, "spacing", spacing, ">= 0 frames (0 = automatic)");
+  try {
+    parse_key_groups(groups);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string(o) + ".groups = " + options::value_text(groups) + ": " + e.what());
+  }
+}
+
 KeySpacing choose_key_spacing(const motion::Motion& m, const KeySpacingOptions& o,
                               std::vector<KeyGroupChoice>* details) {
   if (!m.skeleton) throw std::invalid_argument("choose_key_spacing: motion has no skeleton");
-  if (!(o.threshold > 0 && o.threshold < 1))
-    throw std::invalid_argument("key spacing threshold " + std::to_string(o.threshold) +
-                                ": expected a fraction of the band energy in (0, 1)");
-  if (o.spacing < 0)
-    throw std::invalid_argument("key spacing " + std::to_string(o.spacing) +
-                                ": expected >= 0 (0 = automatic)");
+  o.validate();
   const motion::Skeleton& s = *m.skeleton;
   const std::vector<KeyGroup> groups = parse_key_groups(o.groups);
 

@@ -363,17 +363,9 @@ void write_band(kg::JsonWriter& w, const BandEnergy& b) {
   w.field("channels", b.channels);
   w.end_object();
 }
-}  // namespace
 
-Report metrics_report(const RetargetMetrics& m) {
-  Report report;
-  kg::JsonWriter w(report);
-  w.begin_object();
-  w.field("version", 1);
-  w.field("motion", m.motion_name);
-  w.field("frames", m.frames);
-  w.field("fps", m.fps);
-
+// "violation": the worst violation and each kind's figures.
+void write_violations(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("violation");
   w.begin_object();
   w.field("worst_cm", 100 * m.worst_violation_metres);
@@ -396,6 +388,10 @@ Report metrics_report(const RetargetMetrics& m) {
   w.end_array();
   w.end_object();
 
+}
+
+// "foot_skate_cm": the plants' travel.
+void write_skate(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("foot_skate_cm");
   w.begin_object();
   w.field("worst", 100 * m.skate.worst);
@@ -416,6 +412,10 @@ Report metrics_report(const RetargetMetrics& m) {
   w.end_array();
   w.end_object();
 
+}
+
+// "jerk": of the result, the source, their difference and the displacement.
+void write_jerks(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("jerk");
   w.begin_object();
   w.key("result");
@@ -441,6 +441,10 @@ Report metrics_report(const RetargetMetrics& m) {
     w.null();
   w.end_object();
 
+}
+
+// "energy_above_cutoff": the pyramid's band energy above the key spacing's cutoff, or null.
+void write_energy(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.key("energy_above_cutoff");
   if (m.energy) {
     w.begin_object();
@@ -455,6 +459,22 @@ Report metrics_report(const RetargetMetrics& m) {
   } else {
     w.null();
   }
+}
+
+}  // namespace
+
+Report metrics_report(const RetargetMetrics& m) {
+  Report report;
+  kg::JsonWriter w(report);
+  w.begin_object();
+  w.field("version", 1);
+  w.field("motion", m.motion_name);
+  w.field("frames", m.frames);
+  w.field("fps", m.fps);
+  write_violations(w, m);
+  write_skate(w, m);
+  write_jerks(w, m);
+  write_energy(w, m);
   w.field("solve_seconds", m.solve_seconds);
   w.end_object();
   return report;

@@ -10,6 +10,7 @@
 
 #include <Eigen/Cholesky>
 
+#include "kg/base/option_check.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 
@@ -158,43 +159,36 @@ std::string where(const Constraint& c) {
   return "constraint '" + c.label + "' (" + c.kind + ")";
 }
 
-}  // namespace
-
-PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& set, const KindFinder& kinds,
-                                    const PerFrameIkOptions& options) {
-  const auto start = std::chrono::steady_clock::now();
-  initial.check();
-  if (!(options.epsilon >= 0) || options.max_iterations < 1 || !(options.tolerance >= 0))
-    throw std::invalid_argument("per-frame IK: epsilon and tolerance must be >= 0 and max_iterations >= 1");
-  const motion::Skeleton& skeleton = *initial.skeleton;
-  const int frames = initial.frame_count();
+// The references of `c` checked against the one character's skeleton.
+void check_references(const Constraint& c, const motion::Skeleton& skeleton) {
   const int n = skeleton.channel_count();
+  for (const PointRef& p : c.points) {
+    if (p.character != 0)
+      throw std::invalid_argument(where(c) + ": per-frame IK solves one character, the constraint names character " +
+                                  std::to_string(p.character));
+    if (p.joint < 0 || p.joint >= skeleton.joint_count())
+      throw std::invalid_argument(where(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
+                                  std::to_string(skeleton.joint_count()) + " joints)");
+  }
+  for (const ChannelRef& ch : c.channels) {
+    if (ch.character != 0)
+      throw std::invalid_argument(where(c) + ": per-frame IK solves one character, the constraint names character " +
+                                  std::to_string(ch.character));
+    if (ch.channel < 0 || ch.channel >= n)
+      throw std::invalid_argument(where(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
+                                  std::to_string(n) + " channels)");
+  }
+}
 
-  // Samples by the frame they belong to (the latest they read), checked on the way.
+// Samples by the frame they belong to (the latest they read), checked on the way.
+std::vector<std::vector<SampleRef>> samples_by_frame(const ConstraintSet& set, const KindFinder& kinds,
+                                                     const motion::Skeleton& skeleton, int frames) {
   std::vector<std::vector<SampleRef>> by_frame(static_cast<std::size_t>(frames));
   for (const Constraint& c : set.constraints) {
     const ConstraintKind* kind = kinds ? kinds(c.kind) : nullptr;
     if (kind == nullptr) throw std::invalid_argument(where(c) + ": unknown constraint kind '" + c.kind + "'");
     kind->check(c);
-    for (const PointRef& p : c.points) {
-      if (p.character != 0)
-        throw std::invalid_argument(where(c) +
-                                    ": per-frame IK solves one character, the constraint names character " +
-                                    std::to_string(p.character));
-      if (p.joint < 0 || p.joint >= skeleton.joint_count())
-        throw std::invalid_argument(where(c) + ": joint " + std::to_string(p.joint) +
-                                    " out of range (skeleton has " + std::to_string(skeleton.joint_count()) +
-                                    " joints)");
-    }
-    for (const ChannelRef& ch : c.channels) {
-      if (ch.character != 0)
-        throw std::invalid_argument(where(c) +
-                                    ": per-frame IK solves one character, the constraint names character " +
-                                    std::to_string(ch.character));
-      if (ch.channel < 0 || ch.channel >= n)
-        throw std::invalid_argument(where(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
-                                    std::to_string(n) + " channels)");
-    }
+    check_references(c, skeleton);
     const int rows = kind->rows(c);
     const std::size_t reads = c.points.size() + c.channels.size();
     for (const Sample& s : c.samples) {
@@ -204,103 +198,123 @@ PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& 
       int last = -1;
       for (int f : s.frames) {
         if (f < 0 || f >= frames)
-          throw std::invalid_argument(where(c) + ": frame " + std::to_string(f) +
-                                      " out of range (motion has " + std::to_string(frames) + " frames)");
+          throw std::invalid_argument(where(c) + ": frame " + std::to_string(f) + " out of range (motion has " +
+                                      std::to_string(frames) + " frames)");
         last = std::max(last, f);
       }
       if (last >= 0 && rows > 0) by_frame[static_cast<std::size_t>(last)].push_back({&c, kind, &s, rows});
     }
   }
+  return by_frame;
+}
 
-  PerFrameIkResult result;
-  result.motion = initial;
-  Motion& out = result.motion;
-  const Eigen::VectorXd m = channel_sensitivity(skeleton);
-  const Eigen::VectorXd eps_m = options.epsilon * m;
+// Levenberg-Marquardt on one frame's F_f (per_frame_ik.hpp), over the channels its rows can
+// move. The buffers live over every frame (no allocation once sized).
+class FrameSolver {
+ public:
+  FrameSolver(const motion::Skeleton& skeleton, const PerFrameIkOptions& options)
+      : options_(options), m_(channel_sensitivity(skeleton)), eps_m_(options.epsilon * m_) {}
 
-  // World transforms of every solved frame (fixed points of multi-frame samples read them).
-  std::vector<std::vector<Eigen::Isometry3d>> solved_world(static_cast<std::size_t>(frames));
-  Workspace ws;
-  Eigen::MatrixXd jac, jac_s, normal, lm;
-  Eigen::VectorXd rho, rho_trial, gradient, step, diag;
-  Eigen::RowVectorXd q, q0, q_trial;
-  Eigen::LDLT<Eigen::MatrixXd> ldlt;
-  std::vector<int> unmet;
-
-  auto objective = [&](const Eigen::VectorXd& r, const Eigen::RowVectorXd& x) {
-    const Eigen::RowVectorXd d = x - q0;
-    return 0.5 * r.squaredNorm() + 0.5 * (d.array().square() * eps_m.transpose().array()).sum();
-  };
-
-  for (int f = 0; f < frames; ++f) {
-    std::vector<SampleRef>& samples = by_frame[static_cast<std::size_t>(f)];
-    if (!samples.empty()) {
-      ++result.frames_constrained;
-      FrameProblem problem(skeleton, out, solved_world, std::move(samples), f, ws);
-      q0 = initial.values.row(f);
-      q = q0;
-      const std::vector<int> cols = problem.unknown_channels();
-      const Eigen::Index k = static_cast<Eigen::Index>(cols.size());
-      Eigen::VectorXd eps_s(k), m_s(k);
-      for (Eigen::Index i = 0; i < k; ++i) {
-        eps_s(i) = eps_m(cols[static_cast<std::size_t>(i)]);
-        m_s(i) = m(cols[static_cast<std::size_t>(i)]);
+  // Solves the frame from q0; returns the iterations and leaves q() and worst() (the worst
+  // unweighted violation of its rows at q).
+  int solve(FrameProblem& problem, const Eigen::RowVectorXd& q0) {
+    q0_ = q0;
+    q_ = q0_;
+    select_unknowns(problem);
+    lambda_ = 1e-4;
+    problem.evaluate(q_, rho_, worst_, &jac_);
+    value_ = objective(rho_, q_);
+    int it = 0;
+    for (; it < options_.max_iterations; ++it) {
+      normal_equations();
+      double step_metres = 0;
+      if (!damped_step(problem, step_metres)) break;  // converged, or no step lowers F (a local minimum of F)
+      problem.evaluate(q_, rho_, worst_, &jac_);
+      if (worst_ <= options_.tolerance && step_metres < 1e-7) {
+        ++it;
+        break;
       }
-      double worst = 0, worst_trial = 0;
-      double lambda = 1e-4;
-      problem.evaluate(q, rho, worst, &jac);
-      double value = objective(rho, q);
-      int it = 0;
-      for (; it < options.max_iterations; ++it) {
-        jac_s.resize(jac.rows(), k);
-        for (Eigen::Index i = 0; i < k; ++i) jac_s.col(i) = jac.col(cols[static_cast<std::size_t>(i)]);
-        normal.noalias() = jac_s.transpose() * jac_s;
-        normal.diagonal() += eps_s;
-        gradient.noalias() = jac_s.transpose() * rho;
-        for (Eigen::Index i = 0; i < k; ++i) {
-          const int c = cols[static_cast<std::size_t>(i)];
-          gradient(i) += eps_s(i) * (q(c) - q0(c));
-        }
-        diag = normal.diagonal();
-        bool accepted = false;
-        double step_metres = 0;
-        for (int attempt = 0; attempt < 12 && !accepted; ++attempt) {
-          lm = normal;
-          lm.diagonal() += lambda * diag;
-          ldlt.compute(lm);
-          step = -ldlt.solve(gradient);
-          step_metres = std::sqrt((step.array().square() * m_s.array()).sum());
-          if (worst <= options.tolerance && step_metres < 1e-7) break;  // at the minimum, constraints met
-          q_trial = q;
-          for (Eigen::Index i = 0; i < k; ++i) q_trial(cols[static_cast<std::size_t>(i)]) += step(i);
-          problem.evaluate(q_trial, rho_trial, worst_trial, nullptr);
-          const double trial = objective(rho_trial, q_trial);
-          if (trial < value) {
-            accepted = true;
-            q = q_trial;
-            value = trial;
-            lambda = std::max(lambda * 0.3, 1e-9);
-          } else {
-            lambda *= 10;
-          }
-        }
-        if (!accepted) break;  // converged, or no step lowers F (a local minimum of F)
-        problem.evaluate(q, rho, worst, &jac);
-        if (worst <= options.tolerance && step_metres < 1e-7) {
-          ++it;
-          break;
-        }
-      }
-      result.iterations += it;
-      result.max_frame_iterations = std::max(result.max_frame_iterations, it);
-      if (worst > options.tolerance) unmet.push_back(f);
-      out.values.row(f) = q;
     }
-    solved_world[static_cast<std::size_t>(f)].resize(static_cast<std::size_t>(skeleton.joint_count()));
-    motion::forward_kinematics(skeleton, out.values.row(f), solved_world[static_cast<std::size_t>(f)]);
+    return it;
+  }
+  const Eigen::RowVectorXd& q() const { return q_; }
+  double worst() const { return worst_; }
+
+ private:
+  double objective(const Eigen::VectorXd& r, const Eigen::RowVectorXd& x) const {
+    const Eigen::RowVectorXd d = x - q0_;
+    return 0.5 * r.squaredNorm() + 0.5 * (d.array().square() * eps_m_.transpose().array()).sum();
   }
 
-  // The final violation of every row of the result.
+  // The frame's unknowns (FrameProblem::unknown_channels) and their eps M and M.
+  void select_unknowns(const FrameProblem& problem) {
+    cols_ = problem.unknown_channels();
+    const Eigen::Index k = static_cast<Eigen::Index>(cols_.size());
+    eps_s_.resize(k);
+    m_s_.resize(k);
+    for (Eigen::Index i = 0; i < k; ++i) {
+      eps_s_(i) = eps_m_(cols_[static_cast<std::size_t>(i)]);
+      m_s_(i) = m_(cols_[static_cast<std::size_t>(i)]);
+    }
+  }
+
+  // J^T J + eps M and the gradient of F_f at q, over the unknowns.
+  void normal_equations() {
+    const Eigen::Index k = static_cast<Eigen::Index>(cols_.size());
+    jac_s_.resize(jac_.rows(), k);
+    for (Eigen::Index i = 0; i < k; ++i) jac_s_.col(i) = jac_.col(cols_[static_cast<std::size_t>(i)]);
+    normal_.noalias() = jac_s_.transpose() * jac_s_;
+    normal_.diagonal() += eps_s_;
+    gradient_.noalias() = jac_s_.transpose() * rho_;
+    for (Eigen::Index i = 0; i < k; ++i) {
+      const int c = cols_[static_cast<std::size_t>(i)];
+      gradient_(i) += eps_s_(i) * (q_(c) - q0_(c));
+    }
+    diag_ = normal_.diagonal();
+  }
+
+  // Levenberg-Marquardt's damped step: (normal + lambda D) step = -gradient, lambda shrunk after
+  // a step that lowers F (taken), grown tenfold after one that does not (tried again), 12 tries.
+  // False when no step was taken: the frame is met and at its minimum, or no step lowers F.
+  bool damped_step(FrameProblem& problem, double& step_metres) {
+    const Eigen::Index k = static_cast<Eigen::Index>(cols_.size());
+    for (int attempt = 0; attempt < 12; ++attempt) {
+      lm_ = normal_;
+      lm_.diagonal() += lambda_ * diag_;
+      ldlt_.compute(lm_);
+      step_ = -ldlt_.solve(gradient_);
+      step_metres = std::sqrt((step_.array().square() * m_s_.array()).sum());
+      if (worst_ <= options_.tolerance && step_metres < 1e-7) return false;  // at the minimum, constraints met
+      q_trial_ = q_;
+      for (Eigen::Index i = 0; i < k; ++i) q_trial_(cols_[static_cast<std::size_t>(i)]) += step_(i);
+      problem.evaluate(q_trial_, rho_trial_, worst_trial_, nullptr);
+      const double trial = objective(rho_trial_, q_trial_);
+      if (trial < value_) {
+        q_ = q_trial_;
+        value_ = trial;
+        lambda_ = std::max(lambda_ * 0.3, 1e-9);
+        return true;
+      }
+      lambda_ *= 10;
+    }
+    return false;
+  }
+
+  const PerFrameIkOptions& options_;
+  const Eigen::VectorXd m_, eps_m_;
+  std::vector<int> cols_;
+  Eigen::VectorXd eps_s_, m_s_;
+  Eigen::MatrixXd jac_, jac_s_, normal_, lm_;
+  Eigen::VectorXd rho_, rho_trial_, gradient_, step_, diag_;
+  Eigen::RowVectorXd q_, q0_, q_trial_;
+  Eigen::LDLT<Eigen::MatrixXd> ldlt_;
+  double lambda_ = 0, value_ = 0, worst_ = 0, worst_trial_ = 0;
+};
+
+// The final violation of every row of the solved motion: the worst and the frame holding it.
+void measure_violations(const ConstraintSet& set, const KindFinder& kinds, const Motion& out,
+                        const std::vector<std::vector<Eigen::Isometry3d>>& solved_world, Workspace& ws,
+                        PerFrameIkResult& result) {
   for (const Constraint& c : set.constraints) {
     const ConstraintKind* kind = kinds(c.kind);
     const int rows = kind->rows(c);
@@ -329,20 +343,67 @@ PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& 
       }
     }
   }
+}
 
-  result.frames_unmet = static_cast<int>(unmet.size());
-  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+std::string outcome_message(const PerFrameIkResult& result, const std::vector<int>& unmet, double tolerance) {
   std::ostringstream msg;
   if (unmet.empty()) {
     msg << "met all constraints on " << result.frames_constrained << " constrained frames (worst violation "
         << result.worst_violation << ", " << result.iterations << " iterations)";
   } else {
-    msg << "constraints unmet past tolerance " << options.tolerance << " on " << unmet.size() << " of "
+    msg << "constraints unmet past tolerance " << tolerance << " on " << unmet.size() << " of "
         << result.frames_constrained << " constrained frames (first " << unmet.front() << ", last "
         << unmet.back() << "); worst violation " << result.worst_violation << " at frame "
         << result.worst_frame;
   }
-  result.message = msg.str();
+  return msg.str();
+}
+
+}  // namespace
+
+void PerFrameIkOptions::validate() const {
+  using options::require;
+  const char* o = "PerFrameIkOptions";
+  require(options::non_negative(epsilon), o, "epsilon", epsilon, ">= 0 and finite");
+  require(max_iterations >= 1, o, "max_iterations", max_iterations, ">= 1");
+  require(options::non_negative(tolerance), o, "tolerance", tolerance, ">= 0 and finite (metres or radians)");
+}
+
+PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& set, const KindFinder& kinds,
+                                    const PerFrameIkOptions& options) {
+  const auto start = std::chrono::steady_clock::now();
+  initial.check();
+  options.validate();
+  const motion::Skeleton& skeleton = *initial.skeleton;
+  const int frames = initial.frame_count();
+  std::vector<std::vector<SampleRef>> by_frame = samples_by_frame(set, kinds, skeleton, frames);
+
+  PerFrameIkResult result;
+  result.motion = initial;
+  Motion& out = result.motion;
+  // World transforms of every solved frame (fixed points of multi-frame samples read them).
+  std::vector<std::vector<Eigen::Isometry3d>> solved_world(static_cast<std::size_t>(frames));
+  Workspace ws;
+  FrameSolver solver(skeleton, options);
+  std::vector<int> unmet;
+  for (int f = 0; f < frames; ++f) {
+    std::vector<SampleRef>& samples = by_frame[static_cast<std::size_t>(f)];
+    if (!samples.empty()) {
+      ++result.frames_constrained;
+      FrameProblem problem(skeleton, out, solved_world, std::move(samples), f, ws);
+      const int it = solver.solve(problem, initial.values.row(f));
+      result.iterations += it;
+      result.max_frame_iterations = std::max(result.max_frame_iterations, it);
+      if (solver.worst() > options.tolerance) unmet.push_back(f);
+      out.values.row(f) = solver.q();
+    }
+    solved_world[static_cast<std::size_t>(f)].resize(static_cast<std::size_t>(skeleton.joint_count()));
+    motion::forward_kinematics(skeleton, out.values.row(f), solved_world[static_cast<std::size_t>(f)]);
+  }
+  measure_violations(set, kinds, out, solved_world, ws, result);
+  result.frames_unmet = static_cast<int>(unmet.size());
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  result.message = outcome_message(result, unmet, options.tolerance);
   return result;
 }
 

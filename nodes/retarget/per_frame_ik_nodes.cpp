@@ -18,6 +18,7 @@ class PerFrameIkNode final : public graph::Node {
     options_.epsilon = p.get<double>("epsilon");
     options_.max_iterations = static_cast<int>(p.get<std::int64_t>("iterations"));
     options_.tolerance = p.get<double>("tolerance_mm") / 1000.0;
+    options_.validate();  // a bad setting fails when the graph loads
   }
   void run(graph::RunContext& ctx) const override {
     const motion::Motion& initial = ctx.input<motion::Motion>("motion");

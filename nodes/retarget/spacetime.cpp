@@ -10,6 +10,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "kg/base/option_check.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/numerics/banded_cholesky.hpp"
 
@@ -76,14 +77,6 @@ struct Group {  // single-piece samples of one (character, frame)
   int character = 0, frame = 0;
   std::vector<int> samples;
   std::vector<int> touched;  // per assembly
-};
-
-struct PassOutcome {
-  bool converged = false;
-  int iterations = 0;
-  int bandwidth = 0;
-  int unknowns = 0;
-  std::string stop_reason;
 };
 
 class Pass {
@@ -292,84 +285,111 @@ class Pass {
     return c;
   }
 
+  // Every sample of every constraint: the (character, frame) pieces it reads and their free
+  // channels (sample_pieces), where its points' chains and its values sit among those channels
+  // (locate_channels), its rows (count_rows), its group (file_sample); then the buffers sized.
   void build_samples() {
     std::map<std::pair<int, int>, int> group_of;
-    for (std::size_t ci = 0; ci < set_.constraints.size(); ++ci) {
-      const Constraint& con = set_.constraints[ci];
-      const KindInfo& kind = kinds_[ci];
-      for (std::size_t si = 0; si < con.samples.size(); ++si) {
-        const Sample& sample = con.samples[si];
-        SampleInfo s;
-        s.constraint = static_cast<int>(ci);
-        s.sample = static_cast<int>(si);
-        s.row_offset = rows_total_;
-        s.rows = kind.rows;
-        auto piece_of = [&](int character, int frame) {
-          for (std::size_t i = 0; i < s.pieces.size(); ++i)
-            if (s.pieces[i].character == character && s.pieces[i].frame == frame) return static_cast<int>(i);
-          s.pieces.push_back({character, frame, {}, 0});
-          return static_cast<int>(s.pieces.size() - 1);
-        };
-        const std::size_t np = con.points.size();
-        for (std::size_t p = 0; p < np; ++p) {
-          const PointRef& pr = con.points[p];
-          Character& ch = chars_[static_cast<std::size_t>(pr.character)];
-          const int piece = piece_of(pr.character, sample.frames[p]);
-          s.point_piece.push_back(piece);
-          for (int c : chain(ch, pr.joint))
-            if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
-        }
-        for (std::size_t v = 0; v < con.channels.size(); ++v) {
-          const ChannelRef& cr = con.channels[v];
-          const int piece = piece_of(cr.character, sample.frames[np + v]);
-          s.value_piece.push_back(piece);
-          if (chars_[static_cast<std::size_t>(cr.character)].free[static_cast<std::size_t>(cr.channel)])
-            s.pieces[static_cast<std::size_t>(piece)].channels.push_back(cr.channel);
-        }
-        for (Piece& piece : s.pieces) {
-          std::sort(piece.channels.begin(), piece.channels.end());
-          piece.channels.erase(std::unique(piece.channels.begin(), piece.channels.end()), piece.channels.end());
-          piece.g_offset = g_size_;
-          g_size_ += static_cast<std::size_t>(s.rows) * piece.channels.size();
-        }
-        auto position = [](const Piece& piece, int c) {
-          auto it = std::lower_bound(piece.channels.begin(), piece.channels.end(), c);
-          return it != piece.channels.end() && *it == c ? static_cast<int>(it - piece.channels.begin()) : -1;
-        };
-        for (std::size_t p = 0; p < np; ++p) {
-          const PointRef& pr = con.points[p];
-          const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
-          std::vector<int> pos;
-          for (int c : chain(chars_[static_cast<std::size_t>(pr.character)], pr.joint))
-            pos.push_back(position(piece, c));
-          s.point_pos.push_back(std::move(pos));
-        }
-        for (std::size_t v = 0; v < con.channels.size(); ++v)
-          s.value_pos.push_back(
-              position(s.pieces[static_cast<std::size_t>(s.value_piece[v])], con.channels[v].channel));
-        for (int r = 0; r < s.rows; ++r) {
-          inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
-          weight_.push_back(con.weight);
-        }
-        rows_total_ += s.rows;
-        max_rows_ = std::max(max_rows_, s.rows);
-        max_points_ = std::max(max_points_, static_cast<int>(np));
-        max_values_ = std::max(max_values_, static_cast<int>(con.channels.size()));
-        const int index = static_cast<int>(samples_.size());
-        if (s.pieces.size() == 1) {
-          const auto key = std::make_pair(s.pieces[0].character, s.pieces[0].frame);
-          auto it = group_of.find(key);
-          if (it == group_of.end()) {
-            it = group_of.emplace(key, static_cast<int>(groups_.size())).first;
-            groups_.push_back({key.first, key.second, {}, {}});
-          }
-          groups_[static_cast<std::size_t>(it->second)].samples.push_back(index);
-        } else if (!s.pieces.empty()) {
-          multi_.push_back(index);
-        }
-        samples_.push_back(std::move(s));
+    for (std::size_t ci = 0; ci < set_.constraints.size(); ++ci)
+      for (std::size_t si = 0; si < set_.constraints[ci].samples.size(); ++si) {
+        SampleInfo s = sample_pieces(static_cast<int>(ci), static_cast<int>(si));
+        locate_channels(s);
+        count_rows(s);
+        file_sample(std::move(s), group_of);
       }
+    size_buffers();
+  }
+
+  SampleInfo sample_pieces(int ci, int si) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(ci)];
+    const Sample& sample = con.samples[static_cast<std::size_t>(si)];
+    SampleInfo s;
+    s.constraint = ci;
+    s.sample = si;
+    s.row_offset = rows_total_;
+    s.rows = kinds_[static_cast<std::size_t>(ci)].rows;
+    auto piece_of = [&](int character, int frame) {
+      for (std::size_t i = 0; i < s.pieces.size(); ++i)
+        if (s.pieces[i].character == character && s.pieces[i].frame == frame) return static_cast<int>(i);
+      s.pieces.push_back({character, frame, {}, 0});
+      return static_cast<int>(s.pieces.size() - 1);
+    };
+    const std::size_t np = con.points.size();
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      Character& ch = chars_[static_cast<std::size_t>(pr.character)];
+      const int piece = piece_of(pr.character, sample.frames[p]);
+      s.point_piece.push_back(piece);
+      for (int c : chain(ch, pr.joint))
+        if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
     }
+    for (std::size_t v = 0; v < con.channels.size(); ++v) {
+      const ChannelRef& cr = con.channels[v];
+      const int piece = piece_of(cr.character, sample.frames[np + v]);
+      s.value_piece.push_back(piece);
+      if (chars_[static_cast<std::size_t>(cr.character)].free[static_cast<std::size_t>(cr.channel)])
+        s.pieces[static_cast<std::size_t>(piece)].channels.push_back(cr.channel);
+    }
+    for (Piece& piece : s.pieces) {
+      std::sort(piece.channels.begin(), piece.channels.end());
+      piece.channels.erase(std::unique(piece.channels.begin(), piece.channels.end()), piece.channels.end());
+      piece.g_offset = g_size_;
+      g_size_ += static_cast<std::size_t>(s.rows) * piece.channels.size();
+    }
+    return s;
+  }
+
+  void locate_channels(SampleInfo& s) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(s.constraint)];
+    const std::size_t np = con.points.size();
+    auto position = [](const Piece& piece, int c) {
+      auto it = std::lower_bound(piece.channels.begin(), piece.channels.end(), c);
+      return it != piece.channels.end() && *it == c ? static_cast<int>(it - piece.channels.begin()) : -1;
+    };
+    for (std::size_t p = 0; p < np; ++p) {
+      const PointRef& pr = con.points[p];
+      const Piece& piece = s.pieces[static_cast<std::size_t>(s.point_piece[p])];
+      std::vector<int> pos;
+      for (int c : chain(chars_[static_cast<std::size_t>(pr.character)], pr.joint))
+        pos.push_back(position(piece, c));
+      s.point_pos.push_back(std::move(pos));
+    }
+    for (std::size_t v = 0; v < con.channels.size(); ++v)
+      s.value_pos.push_back(
+          position(s.pieces[static_cast<std::size_t>(s.value_piece[v])], con.channels[v].channel));
+  }
+
+  void count_rows(const SampleInfo& s) {
+    const Constraint& con = set_.constraints[static_cast<std::size_t>(s.constraint)];
+    const KindInfo& kind = kinds_[static_cast<std::size_t>(s.constraint)];
+    for (int r = 0; r < s.rows; ++r) {
+      inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
+      weight_.push_back(con.weight);
+    }
+    rows_total_ += s.rows;
+    max_rows_ = std::max(max_rows_, s.rows);
+    max_points_ = std::max(max_points_, static_cast<int>(con.points.size()));
+    max_values_ = std::max(max_values_, static_cast<int>(con.channels.size()));
+  }
+
+  // A single-piece sample joins the group of its (character, frame), others the multi-frame list.
+  void file_sample(SampleInfo s, std::map<std::pair<int, int>, int>& group_of) {
+    const int index = static_cast<int>(samples_.size());
+    if (s.pieces.size() == 1) {
+      const auto key = std::make_pair(s.pieces[0].character, s.pieces[0].frame);
+      auto it = group_of.find(key);
+      if (it == group_of.end()) {
+        it = group_of.emplace(key, static_cast<int>(groups_.size())).first;
+        groups_.push_back({key.first, key.second, {}, {}});
+      }
+      groups_[static_cast<std::size_t>(it->second)].samples.push_back(index);
+    } else if (!s.pieces.empty()) {
+      multi_.push_back(index);
+    }
+    samples_.push_back(std::move(s));
+  }
+
+  void size_buffers() {
     r_ = Eigen::VectorXd::Zero(rows_total_);
     g_.assign(g_size_, 0.0);
     points_.resize(static_cast<std::size_t>(max_points_));
@@ -533,9 +553,34 @@ class Pass {
     return true;
   }
 
-  // Normal equations of the active rows over the controls of the channels they touch.
+  // Normal equations of the active rows over the controls of the channels they touch: the
+  // channels (touched_channels), their controls in control-major order (order_controls), the
+  // band they need (needed_bandwidth), the per-frame blocks (frame_block, spread_frame_block),
+  // the samples reading several frames (add_rows), the damping eps M (add_damping).
   void assemble(const Eigen::VectorXd& x) {
-    // 1. Channels the active rows touch.
+    std::vector<char> touched = touched_channels();
+    // Rebuilt only when the set changes.
+    if (touched != band_channel_ || band_index_.empty()) order_controls(std::move(touched));
+    const int n = static_cast<int>(band_global_.size());
+    band_.reset(n, std::min(needed_bandwidth(), std::max(0, n - 1)));
+    grad_.setZero(n);
+    for (const Group& g : groups_) {
+      if (g.touched.empty()) continue;
+      Character& ch = chars_[static_cast<std::size_t>(g.character)];
+      frame_block(g, ch);
+      spread_frame_block(g, ch);
+    }
+    // Samples reading several frames or both characters, row blocks at once.
+    if (static_cast<int>(local_column_.size()) != n) local_column_.assign(static_cast<std::size_t>(n), -1);
+    for (int si : multi_) {
+      const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
+      if (sample_active(s)) add_rows(s, [&](int row) { return active_[static_cast<std::size_t>(row)] != 0; });
+    }
+    add_damping(x);
+  }
+
+  // The channels (c_offset + c) the active rows touch; each group's own in Group::touched.
+  std::vector<char> touched_channels() {
     std::vector<char> touched(band_channel_.size(), 0);
     for (std::size_t gi = 0; gi < groups_.size(); ++gi) {
       Group& g = groups_[gi];
@@ -560,38 +605,44 @@ class Pass {
       for (const Piece& p : s.pieces)
         for (int c : p.channels) touched[static_cast<std::size_t>(chars_[static_cast<std::size_t>(p.character)].c_offset + c)] = 1;
     }
-    // 2. Control-major order of their unknowns (rebuilt only when the set changes).
-    if (touched != band_channel_ || band_index_.empty()) {
-      band_channel_ = touched;
-      struct Item {
-        int frame, character, channel, control;
-      };
-      std::vector<Item> items;
-      for (std::size_t k = 0; k < chars_.size(); ++k) {
-        const Character& ch = chars_[k];
-        for (int c = 0; c < ch.channels; ++c) {
-          if (!band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
-          for (int j = 0; j < ch.layout.control_count(c); ++j)
-            items.push_back({ch.layout.control_frame(c, j), static_cast<int>(k), c, j});
-        }
-      }
-      std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-        if (a.frame != b.frame) return a.frame < b.frame;
-        if (a.character != b.character) return a.character < b.character;
-        return a.channel < b.channel;
-      });
-      band_index_.assign(static_cast<std::size_t>(x_size_), -1);
-      band_global_.clear();
-      band_sensitivity_.clear();
-      for (const Item& it : items) {
-        const Character& ch = chars_[static_cast<std::size_t>(it.character)];
-        const int global = ch.x_offset + ch.layout.unknown(it.channel, it.control);
-        band_index_[static_cast<std::size_t>(global)] = static_cast<int>(band_global_.size());
-        band_global_.push_back(global);
-        band_sensitivity_.push_back(ch.sensitivity[it.channel]);
+    return touched;
+  }
+
+  // The unknowns of the touched channels in control-major order (every channel of one control
+  // time together): band_index_, band_global_ and band_sensitivity_.
+  void order_controls(std::vector<char> touched) {
+    band_channel_ = std::move(touched);
+    struct Item {
+      int frame, character, channel, control;
+    };
+    std::vector<Item> items;
+    for (std::size_t k = 0; k < chars_.size(); ++k) {
+      const Character& ch = chars_[k];
+      for (int c = 0; c < ch.channels; ++c) {
+        if (!band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
+        for (int j = 0; j < ch.layout.control_count(c); ++j)
+          items.push_back({ch.layout.control_frame(c, j), static_cast<int>(k), c, j});
       }
     }
-    // 3. Bandwidth: the widest index span of one group or one multi-frame row.
+    std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
+      if (a.frame != b.frame) return a.frame < b.frame;
+      if (a.character != b.character) return a.character < b.character;
+      return a.channel < b.channel;
+    });
+    band_index_.assign(static_cast<std::size_t>(x_size_), -1);
+    band_global_.clear();
+    band_sensitivity_.clear();
+    for (const Item& it : items) {
+      const Character& ch = chars_[static_cast<std::size_t>(it.character)];
+      const int global = ch.x_offset + ch.layout.unknown(it.channel, it.control);
+      band_index_[static_cast<std::size_t>(global)] = static_cast<int>(band_global_.size());
+      band_global_.push_back(global);
+      band_sensitivity_.push_back(ch.sensitivity[it.channel]);
+    }
+  }
+
+  // Bandwidth: the widest index span of one group or one multi-frame row.
+  int needed_bandwidth() const {
     int b = 0;
     for (const Group& g : groups_) {
       if (g.touched.empty()) continue;
@@ -618,67 +669,66 @@ class Pass {
       }
       if (hi >= 0) b = std::max(b, hi - lo);
     }
-    const int n = static_cast<int>(band_global_.size());
-    band_.reset(n, std::min(b, std::max(0, n - 1)));
-    grad_.setZero(n);
+    return b;
+  }
 
-    // 4. Per-frame blocks: rows of one (character, frame) in channel space, then spread over the
-    //    4 controls per channel that frame weighs.
-    for (const Group& g : groups_) {
-      if (g.touched.empty()) continue;
-      Character& ch = chars_[static_cast<std::size_t>(g.character)];
-      for (int si : g.samples) {
-        const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
-        if (!sample_active(s)) continue;
-        const Piece& piece = s.pieces[0];
-        const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
-        const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
-                                                  static_cast<Eigen::Index>(piece.channels.size()));
-        const int m = static_cast<int>(piece.channels.size());
-        for (int r = 0; r < s.rows; ++r) {
-          if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
-          const double wr = w * w * rho(s.row_offset + r);
-          for (int i = 0; i < m; ++i) {
-            const int ci = piece.channels[static_cast<std::size_t>(i)];
-            const double gi = G(r, i);
-            if (gi == 0) continue;
-            ch.gradient[ci] += gi * wr;
-            const double wgi = w * w * gi;
-            for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
-          }
-        }
-      }
-      int ia[4], ib[4];
-      for (int a : g.touched) {
-        const motion::BasisAt& ba = ch.layout.basis(a, g.frame);
-        for (int p = 0; p < 4; ++p) {
-          ia[p] = band_index(ch, a, ba.first + p);
-          grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
-        }
-        for (int bc : g.touched) {
-          const double nab = ch.normal(a, bc);
-          if (nab == 0) continue;
-          const motion::BasisAt& bb = ch.layout.basis(bc, g.frame);
-          for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
-          for (int p = 0; p < 4; ++p) {
-            const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
-            for (int q = 0; q < 4; ++q)
-              if (ia[p] >= ib[q]) band_.at(ia[p], ib[q]) += wp * bb.weight[static_cast<std::size_t>(q)];
-          }
-        }
-      }
-      for (int a : g.touched) {
-        ch.gradient[a] = 0;
-        for (int bc : g.touched) ch.normal(a, bc) = 0;
-      }
-    }
-    // 5. Samples reading several frames or both characters, row blocks at once.
-    if (static_cast<int>(local_column_.size()) != n) local_column_.assign(static_cast<std::size_t>(n), -1);
-    for (int si : multi_) {
+  // Rows of one (character, frame) in channel space: J^T J and J^T rho into the character's
+  // normal and gradient scratch.
+  void frame_block(const Group& g, Character& ch) {
+    for (int si : g.samples) {
       const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
-      if (sample_active(s)) add_rows(s, [&](int row) { return active_[static_cast<std::size_t>(row)] != 0; });
+      if (!sample_active(s)) continue;
+      const Piece& piece = s.pieces[0];
+      const double w = set_.constraints[static_cast<std::size_t>(s.constraint)].weight;
+      const Eigen::Map<const Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
+                                                static_cast<Eigen::Index>(piece.channels.size()));
+      const int m = static_cast<int>(piece.channels.size());
+      for (int r = 0; r < s.rows; ++r) {
+        if (!active_[static_cast<std::size_t>(s.row_offset + r)]) continue;
+        const double wr = w * w * rho(s.row_offset + r);
+        for (int i = 0; i < m; ++i) {
+          const int ci = piece.channels[static_cast<std::size_t>(i)];
+          const double gi = G(r, i);
+          if (gi == 0) continue;
+          ch.gradient[ci] += gi * wr;
+          const double wgi = w * w * gi;
+          for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
+        }
+      }
     }
-    // 6. Damping.
+  }
+
+  // The frame's block spread over the 4 controls per channel that frame weighs, and the scratch
+  // cleared.
+  void spread_frame_block(const Group& g, Character& ch) {
+    int ia[4], ib[4];
+    for (int a : g.touched) {
+      const motion::BasisAt& ba = ch.layout.basis(a, g.frame);
+      for (int p = 0; p < 4; ++p) {
+        ia[p] = band_index(ch, a, ba.first + p);
+        grad_[ia[p]] += ba.weight[static_cast<std::size_t>(p)] * ch.gradient[a];
+      }
+      for (int bc : g.touched) {
+        const double nab = ch.normal(a, bc);
+        if (nab == 0) continue;
+        const motion::BasisAt& bb = ch.layout.basis(bc, g.frame);
+        for (int q = 0; q < 4; ++q) ib[q] = band_index(ch, bc, bb.first + q);
+        for (int p = 0; p < 4; ++p) {
+          const double wp = ba.weight[static_cast<std::size_t>(p)] * nab;
+          for (int q = 0; q < 4; ++q)
+            if (ia[p] >= ib[q]) band_.at(ia[p], ib[q]) += wp * bb.weight[static_cast<std::size_t>(q)];
+        }
+      }
+    }
+    for (int a : g.touched) {
+      ch.gradient[a] = 0;
+      for (int bc : g.touched) ch.normal(a, bc) = 0;
+    }
+  }
+
+  // Damping: eps M on the diagonal, eps M x in the gradient.
+  void add_damping(const Eigen::VectorXd& x) {
+    const int n = static_cast<int>(band_global_.size());
     for (int i = 0; i < n; ++i) {
       const double em = options_.epsilon * band_sensitivity_[static_cast<std::size_t>(i)];
       band_.at(i, i) += em;
@@ -728,19 +778,9 @@ class Pass {
 
 // --- validation -------------------------------------------------------------------------------
 
-std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
-  if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
-  if (problem.characters.size() > 2)
-    throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
-                                " characters (at most 2 are supported)");
-  if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
-  if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
-  const SpacetimeOptions& o = problem.options;
-  if (!(o.epsilon > 0) || !std::isfinite(o.epsilon))
-    throw std::invalid_argument("spacetime: epsilon " + std::to_string(o.epsilon) + " (expected > 0)");
-  if (!(o.equality_tolerance > 0) || !(o.inequality_tolerance > 0))
-    throw std::invalid_argument("spacetime: tolerances must be > 0");
-  if (o.max_iterations < 0) throw std::invalid_argument("spacetime: max_iterations < 0");
+// Each character against character 0 (frames, rate) and its own skeleton (key spacings, frozen
+// flags, per-frame skeletons).
+void check_characters(const SpacetimeProblem& problem) {
   const int frames = problem.characters[0].initial.frame_count();
   for (std::size_t k = 0; k < problem.characters.size(); ++k) {
     const CharacterProblem& cp = problem.characters[k];
@@ -777,52 +817,66 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
           throw std::invalid_argument(who + "a per-frame skeleton differs in structure from the motion's");
     }
   }
-  const ConstraintSet& set = *problem.constraints;
-  std::vector<KindInfo> kinds;
-  for (const Constraint& c : set.constraints) {
-    KindInfo info;
-    info.kind = problem.kinds(c.kind);
-    if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
-    info.kind->check(c);
-    info.rows = info.kind->rows(c);
-    if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
-    for (int r = 0; r < info.rows; ++r) info.inequality.push_back(info.kind->is_inequality(c, r) ? 1 : 0);
-    if (!(c.weight > 0) || !std::isfinite(c.weight))
-      throw std::invalid_argument(label_of(c) + ": weight " + std::to_string(c.weight) + " (expected > 0)");
-    const int nchar = static_cast<int>(problem.characters.size());
-    for (const PointRef& p : c.points) {
-      if (p.character < 0 || p.character >= nchar)
-        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(p.character) +
-                                    " but the problem has " + std::to_string(nchar));
-      const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
-      if (p.joint < 0 || p.joint >= s.joint_count())
-        throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
-                                    std::to_string(s.joint_count()) + " joints)");
-      if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
-    }
-    if (const std::string problem = sample_locals_problem(c); !problem.empty())
-      throw std::invalid_argument(label_of(c) + ": " + problem);
-    for (const ChannelRef& ch : c.channels) {
-      if (ch.character < 0 || ch.character >= nchar)
-        throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +
-                                    " but the problem has " + std::to_string(nchar));
-      const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
-      if (ch.channel < 0 || ch.channel >= s.channel_count())
-        throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
-                                    std::to_string(s.channel_count()) + " channels)");
-    }
-    const std::size_t want = c.points.size() + c.channels.size();
-    for (const Sample& sm : c.samples) {
-      if (sm.frames.size() != want)
-        throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
-                                    " frames, expected " + std::to_string(want) + " (one per point and channel)");
-      for (int f : sm.frames)
-        if (f < 0 || f >= frames)
-          throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
-                                      std::to_string(frames - 1) + "]");
-    }
-    kinds.push_back(std::move(info));
+}
+
+// One constraint against its kind and the problem's characters; its rows.
+KindInfo check_constraint(const SpacetimeProblem& problem, const Constraint& c, int frames) {
+  KindInfo info;
+  info.kind = problem.kinds(c.kind);
+  if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
+  info.kind->check(c);
+  info.rows = info.kind->rows(c);
+  if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
+  for (int r = 0; r < info.rows; ++r) info.inequality.push_back(info.kind->is_inequality(c, r) ? 1 : 0);
+  if (!(c.weight > 0) || !std::isfinite(c.weight))
+    throw std::invalid_argument(label_of(c) + ": weight " + std::to_string(c.weight) + " (expected > 0)");
+  const int nchar = static_cast<int>(problem.characters.size());
+  for (const PointRef& p : c.points) {
+    if (p.character < 0 || p.character >= nchar)
+      throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(p.character) +
+                                  " but the problem has " + std::to_string(nchar));
+    const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
+    if (p.joint < 0 || p.joint >= s.joint_count())
+      throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
+                                  std::to_string(s.joint_count()) + " joints)");
+    if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
   }
+  if (const std::string problem = sample_locals_problem(c); !problem.empty())
+    throw std::invalid_argument(label_of(c) + ": " + problem);
+  for (const ChannelRef& ch : c.channels) {
+    if (ch.character < 0 || ch.character >= nchar)
+      throw std::invalid_argument(label_of(c) + ": refers to character " + std::to_string(ch.character) +
+                                  " but the problem has " + std::to_string(nchar));
+    const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
+    if (ch.channel < 0 || ch.channel >= s.channel_count())
+      throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
+                                  std::to_string(s.channel_count()) + " channels)");
+  }
+  const std::size_t want = c.points.size() + c.channels.size();
+  for (const Sample& sm : c.samples) {
+    if (sm.frames.size() != want)
+      throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
+                                  " frames, expected " + std::to_string(want) + " (one per point and channel)");
+    for (int f : sm.frames)
+      if (f < 0 || f >= frames)
+        throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
+                                    std::to_string(frames - 1) + "]");
+  }
+  return info;
+}
+
+std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
+  problem.options.validate();
+  if (problem.characters.empty()) throw std::invalid_argument("spacetime: no characters");
+  if (problem.characters.size() > 2)
+    throw std::invalid_argument("spacetime: " + std::to_string(problem.characters.size()) +
+                                " characters (at most 2 are supported)");
+  if (problem.constraints == nullptr) throw std::invalid_argument("spacetime: no constraint set");
+  if (!problem.kinds) throw std::invalid_argument("spacetime: no constraint kind lookup");
+  check_characters(problem);
+  const int frames = problem.characters[0].initial.frame_count();
+  std::vector<KindInfo> kinds;
+  for (const Constraint& c : problem.constraints->constraints) kinds.push_back(check_constraint(problem, c, frames));
   return kinds;
 }
 
@@ -859,7 +913,315 @@ std::string format_length(double metres, bool in_metres) {
   return buf;
 }
 
+// --- the solve: §4 steps 4 and 5, the iteration of §6 ----------------------------------------
+
+// One pass's Levenberg-Marquardt iterate: the controls x of its displacement d, the step dx of
+// eq. 5, the trial point x + alpha dx, F (eq. 4) at x and the damping lambda.
+struct Iterate {
+  Eigen::VectorXd x, dx, trial;
+  Eigen::VectorXd r_at_x;  // residuals at x, for the working set (hold_blocking)
+  double F = 0;
+  double lambda = 0;
+  int iterations = 0;
+};
+
+// How one pass ended.
+struct PassOutcome {
+  bool converged = false;
+  std::string stop_reason;  // when not converged: "iteration limit", "line search failed", ...
+};
+
+// The linearised subproblem (eq. 5, with lambda M) at x: its step dx, then the working set of
+// the active-set method: inequality rows satisfied at x that the full step would cross by more
+// than the tolerance join the active set, and the step is solved again with them (at most
+// options.working_set_resolves times). Returns the slope of F along dx; `full_step_evaluated`
+// says whether the pass's last evaluation is at x + dx.
+double linear_subproblem(Pass& pass, Iterate& s, double slope, const SpacetimeOptions& o,
+                         bool& full_step_evaluated) {
+  s.r_at_x = pass.residual();
+  full_step_evaluated = false;
+  for (int again = 0; again < o.working_set_resolves && slope < 0; ++again) {
+    s.trial = s.x + s.dx;
+    pass.evaluate(s.trial, false);
+    full_step_evaluated = true;
+    if (pass.hold_blocking(s.r_at_x, o.inequality_tolerance) == 0) break;
+    full_step_evaluated = false;
+    pass.evaluate(s.x, true);
+    slope = pass.step_with_held(s.x, s.dx, s.lambda);
+  }
+  return slope;
+}
+
+struct LineSearch {
+  bool accepted = false;
+  double alpha = 1;   // the accepted step length along dx
+  double F_trial = 0;  // F at x + alpha dx
+};
+
+// The line search of §6 ("a value of k such that x + k Delta best satisfies the constraints"):
+// backtracking from alpha = 1 by options.line_search_shrink until F decreases sufficiently
+// (Armijo: F(x + alpha dx) <= F(x) + armijo alpha slope). Leaves the pass evaluated (without
+// Jacobian) at the last trial point, s.trial.
+LineSearch line_search(Pass& pass, Iterate& s, double slope, bool full_step_evaluated, const SpacetimeOptions& o) {
+  LineSearch ls;
+  ls.F_trial = s.F;
+  for (int tried = 0; tried < o.line_search_steps; ++tried, ls.alpha *= o.line_search_shrink) {
+    if (tried > 0 || !full_step_evaluated) {
+      s.trial = s.x + ls.alpha * s.dx;
+      pass.evaluate(s.trial, false);
+    }
+    ls.F_trial = pass.objective(s.trial);
+    if (ls.F_trial <= s.F + o.armijo * ls.alpha * slope) {
+      ls.accepted = true;
+      break;
+    }
+  }
+  return ls;
+}
+
+// Levenberg-Marquardt's damping update: a full step (alpha = 1) says the linearisation is good,
+// lambda shrinks; a shortened one says it is poor, lambda grows the more, the shorter the step.
+double update_damping(double lambda, double alpha, const SpacetimeOptions& o) {
+  return alpha == 1 ? std::max(lambda * o.damping_decrease, o.min_damping)
+                    : std::min(lambda * o.damping_increase / alpha, o.max_damping);
+}
+
+// The worst violation over a pass's iterations, to see a pass that has stopped gaining.
+struct Progress {
+  double worst_before = 0;  // after the previous iteration
+  std::vector<double> history;
+  bool can_densify = false;  // a later pass (§4 step 5) has denser keys to try
+};
+
+// The stopping tests of an accepted step that did not converge: "" to go on, else why the pass
+// stops. F and `decrease` are the objective after the step and what the step took off it.
+const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F, double decrease, double alpha,
+                      const SpacetimeOptions& o) {
+  // Stalled: what is left is what this key spacing can do (or the constraints contradict).
+  const double worst_now = pass.worst_violation();
+  const bool worst_stuck = worst_now > o.stuck_ratio * p.worst_before;
+  p.worst_before = worst_now;
+  p.history.push_back(worst_now);
+  // With denser keys to come, a pass whose worst violation has not gained enough over its last
+  // stall_window iterations has done what its spacing can (the rest is the objective creeping
+  // down): the next pass starts from here.
+  const std::size_t window = static_cast<std::size_t>(o.stall_window);
+  if (p.can_densify && p.history.size() > window &&
+      worst_now > o.stall_ratio * p.history[p.history.size() - 1 - window])
+    return "keys too far apart";
+  if (step_norm < o.min_step || decrease <= (alpha == 1 ? o.min_decrease : o.min_decrease_short) * (F + decrease) ||
+      (worst_stuck && decrease <= o.stuck_decrease * (F + decrease)))
+    return "no further progress";
+  return "";
+}
+
+void trace_iteration(const Pass& pass, const Iterate& s, double alpha, double step_norm, int pass_number,
+                     std::chrono::steady_clock::time_point start, const SpacetimeOptions& o) {
+  char line[200];
+  std::snprintf(line, sizeof line,
+                "pass %d it %d: F %.6g worst %.3g alpha %.3g lambda %.2g |dx| %.3g band %d x %d active %d at %.1f ms",
+                pass_number, s.iterations, s.F, pass.worst_violation(), alpha, s.lambda, step_norm, pass.band_size(),
+                pass.bandwidth(), pass.active_count(),
+                1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  o.trace(line);
+}
+
+// §4 step 4 for one key spacing: the damped least-squares iteration of §6 from x = 0 (d = 0)
+// until the constraints hold within tolerance, options.max_iterations, or a stopping test.
+// Leaves the pass evaluated (with Jacobian) at the final x. Writes the bandwidth and the
+// iterations into `result`.
+PassOutcome iterate_pass(Pass& pass, const SpacetimeOptions& o, bool can_densify,
+                         std::chrono::steady_clock::time_point start, SpacetimeResult& result) {
+  Iterate s;
+  s.x = Eigen::VectorXd::Zero(pass.unknown_total());
+  pass.evaluate(s.x, true);
+  s.F = pass.objective(s.x);
+  s.lambda = o.initial_damping;
+  PassOutcome out{pass.within_tolerance(), "iteration limit"};
+  Progress progress{pass.worst_violation(), {}, can_densify};
+  progress.history.push_back(progress.worst_before);
+  while (!out.converged && s.iterations < o.max_iterations) {
+    pass.release_held(o.working_set_release * o.inequality_tolerance);
+    double slope = pass.step(s.x, s.dx, s.lambda);
+    result.bandwidth = pass.bandwidth();
+    ++s.iterations;
+    bool full_step_evaluated = false;
+    slope = linear_subproblem(pass, s, slope, o, full_step_evaluated);
+    if (!(slope < 0)) {
+      out.stop_reason = "no descent direction";
+      break;
+    }
+    const LineSearch ls = line_search(pass, s, slope, full_step_evaluated, o);
+    if (!ls.accepted) {
+      pass.evaluate(s.x, true);
+      out.stop_reason = "line search failed";
+      break;
+    }
+    s.lambda = update_damping(s.lambda, ls.alpha, o);
+    const double step_norm = ls.alpha * s.dx.lpNorm<Eigen::Infinity>();
+    const double decrease = s.F - ls.F_trial;
+    s.x.swap(s.trial);
+    s.F = ls.F_trial;
+    pass.evaluate(s.x, true);
+    out.converged = pass.within_tolerance();
+    if (o.trace) trace_iteration(pass, s, ls.alpha, step_norm, result.passes, start, o);
+    if (out.converged) break;
+    if (const char* stop = stop_test(pass, progress, step_norm, s.F, decrease, ls.alpha, o); *stop != 0) {
+      out.stop_reason = stop;
+      break;
+    }
+  }
+  result.iterations += s.iterations;
+  return out;
+}
+
+// Whether §4 step 5 could still densify `spacing` (options.densify and a spacing above 1).
+bool can_densify(const std::vector<std::vector<int>>& spacing, const SpacetimeOptions& o) {
+  bool can = false;
+  if (o.densify)
+    for (const std::vector<int>& ks : spacing)
+      for (int k : ks) can = can || k > 1;
+  return can;
+}
+
+// §4 step 5: every key spacing halved (down to 1 frame). False when none could be.
+bool halve_key_spacing(std::vector<std::vector<int>>& spacing) {
+  bool denser = false;
+  for (std::vector<int>& ks : spacing)
+    for (int& k : ks)
+      if (k > 1) {
+        k = std::max(1, k / 2);
+        denser = true;
+      }
+  return denser;
+}
+
+// A violated row of the constraint `index` (first frame `first`) into its ViolatedConstraint.
+void note_violation(std::map<int, ViolatedConstraint>& by_constraint, int index, const Constraint& con, int first,
+                    double viol) {
+  auto [it, fresh] = by_constraint.try_emplace(index);
+  ViolatedConstraint& vc = it->second;
+  if (fresh) {
+    vc.kind = con.kind;
+    vc.label = con.label;
+    vc.first_frame = vc.last_frame = first;
+    vc.in_metres = !con.points.empty();
+  }
+  vc.worst = std::max(vc.worst, viol);
+  vc.first_frame = std::min(vc.first_frame, first);
+  vc.last_frame = std::max(vc.last_frame, first);
+}
+
+// The pass's end, as the result reports it: its unknowns and rows, the per-kind figures and the
+// constraints still violated past tolerance (worst first).
+void report_pass(const Pass& pass, const std::vector<Character>& chars, const ConstraintSet& set,
+                 const SpacetimeOptions& o, SpacetimeResult& result) {
+  result.unknowns = 0;
+  for (const Character& ch : chars)
+    for (int c = 0; c < ch.channels; ++c)
+      if (ch.free[static_cast<std::size_t>(c)]) result.unknowns += ch.layout.control_count(c);
+  result.total_rows = pass.row_total();
+  const Eigen::VectorXd& residual = pass.residual();
+  std::map<std::string, KindReport> by_kind;
+  std::map<int, ViolatedConstraint> by_constraint;
+  for (const SampleInfo& s : pass.samples()) {
+    const Constraint& con = set.constraints[static_cast<std::size_t>(s.constraint)];
+    KindReport& kr = by_kind[con.kind];
+    kr.kind = con.kind;
+    const std::vector<int>& frames = con.samples[static_cast<std::size_t>(s.sample)].frames;
+    const int first = frames.empty() ? 0 : frames[0];
+    for (int r = 0; r < s.rows; ++r) {
+      const double v = residual[s.row_offset + r];
+      const bool ineq = pass.row_inequality(s.row_offset + r);
+      ++kr.rows;
+      if (!ineq || v < 0) ++kr.active_rows;
+      const double viol = ineq ? std::max(0.0, -v) : std::abs(v);
+      double& worst = ineq ? kr.worst_inequality : kr.worst_equality;
+      worst = std::max(worst, viol);
+      if (viol > (ineq ? o.inequality_tolerance : o.equality_tolerance))
+        note_violation(by_constraint, s.constraint, con, first, viol);
+    }
+  }
+  result.active_rows = 0;
+  result.kinds.clear();
+  for (auto& [name, kr] : by_kind) {
+    result.active_rows += kr.active_rows;
+    result.kinds.push_back(kr);
+  }
+  result.violated.clear();
+  for (auto& [index, vc] : by_constraint) result.violated.push_back(vc);
+  std::sort(result.violated.begin(), result.violated.end(),
+            [](const ViolatedConstraint& a, const ViolatedConstraint& b) { return a.worst > b.worst; });
+}
+
+// "did not converge (line search failed after 12 iterations, 2 passes): 3 constraints still
+// violated by up to 2.1 mm: position 'lfoot plant 3' frames 10-14 (2.1 mm); ..."
+std::string failure_message(const SpacetimeResult& result, const std::string& stop) {
+  double worst = 0;
+  bool metres = true;
+  for (const ViolatedConstraint& v : result.violated)
+    if (v.worst > worst) {
+      worst = v.worst;
+      metres = v.in_metres;
+    }
+  char head[160];
+  std::snprintf(head, sizeof head, "did not converge (%s after %d iterations, %d pass%s): %zu constraint%s still violated by up to %s",
+                stop.c_str(), result.iterations, result.passes, result.passes == 1 ? "" : "es",
+                result.violated.size(), result.violated.size() == 1 ? "" : "s",
+                format_length(worst, metres).c_str());
+  std::string msg = head;
+  const std::size_t shown = std::min<std::size_t>(result.violated.size(), 5);
+  for (std::size_t i = 0; i < shown; ++i) {
+    const ViolatedConstraint& v = result.violated[i];
+    msg += i == 0 ? ": " : "; ";
+    msg += v.kind + " '" + v.label + "' frame" + (v.first_frame == v.last_frame ? " " + std::to_string(v.first_frame)
+                                                                                 : "s " + std::to_string(v.first_frame) + "-" +
+                                                                                       std::to_string(v.last_frame)) +
+           " (" + format_length(v.worst, v.in_metres) + ")";
+  }
+  if (result.violated.size() > shown) msg += "; ...";
+  return msg;
+}
+
+std::string converged_message(const SpacetimeResult& result) {
+  char head[160];
+  std::snprintf(head, sizeof head, "converged in %d iterations (%d pass%s), worst violation %s", result.iterations,
+                result.passes, result.passes == 1 ? "" : "es", format_length(result.worst_violation(), true).c_str());
+  return head;
+}
+
 }  // namespace
+
+void SpacetimeOptions::validate() const {
+  using options::non_negative;
+  using options::positive;
+  using options::require;
+  const char* o = "SpacetimeOptions";
+  require(positive(epsilon), o, "epsilon", epsilon, "> 0 and finite");
+  require(positive(equality_tolerance), o, "equality_tolerance", equality_tolerance, "> 0 and finite (metres or radians)");
+  require(positive(inequality_tolerance), o, "inequality_tolerance", inequality_tolerance,
+          "> 0 and finite (metres or radians)");
+  require(max_iterations >= 0, o, "max_iterations", max_iterations, ">= 0");
+  require(non_negative(initial_damping), o, "initial_damping", initial_damping, ">= 0 and finite");
+  require(damping_decrease > 0 && damping_decrease <= 1, o, "damping_decrease", damping_decrease, "in (0, 1]");
+  require(damping_increase >= 1 && std::isfinite(damping_increase), o, "damping_increase", damping_increase,
+          ">= 1 and finite");
+  require(non_negative(min_damping), o, "min_damping", min_damping, ">= 0 and finite");
+  require(max_damping >= min_damping && std::isfinite(max_damping), o, "max_damping", max_damping,
+          ">= min_damping (" + text::format_double(min_damping) + ") and finite");
+  require(armijo > 0 && armijo < 1, o, "armijo", armijo, "in (0, 1)");
+  require(line_search_shrink > 0 && line_search_shrink < 1, o, "line_search_shrink", line_search_shrink, "in (0, 1)");
+  require(line_search_steps >= 1, o, "line_search_steps", line_search_steps, ">= 1");
+  require(working_set_resolves >= 0, o, "working_set_resolves", working_set_resolves, ">= 0");
+  require(non_negative(working_set_release), o, "working_set_release", working_set_release, ">= 0 and finite");
+  require(non_negative(min_step), o, "min_step", min_step, ">= 0 and finite");
+  require(min_decrease >= 0 && min_decrease < 1, o, "min_decrease", min_decrease, "in [0, 1)");
+  require(min_decrease_short >= 0 && min_decrease_short < 1, o, "min_decrease_short", min_decrease_short, "in [0, 1)");
+  require(stuck_ratio >= 0 && stuck_ratio <= 1, o, "stuck_ratio", stuck_ratio, "in [0, 1]");
+  require(stuck_decrease >= 0 && stuck_decrease < 1, o, "stuck_decrease", stuck_decrease, "in [0, 1)");
+  require(stall_window >= 1, o, "stall_window", stall_window, ">= 1");
+  require(stall_ratio >= 0 && stall_ratio <= 1, o, "stall_ratio", stall_ratio, "in [0, 1]");
+}
 
 const char* to_string(SpacetimeStatus status) {
   return status == SpacetimeStatus::Converged ? "converged" : "not converged";
@@ -934,8 +1296,8 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
   const auto start = std::chrono::steady_clock::now();
   const std::vector<KindInfo> kinds = check_problem(problem);
   const SpacetimeOptions& options = problem.options;
-  const ConstraintSet& set = *problem.constraints;
 
+  // §4: m1 of the first pass is the initial estimate, the later passes start from m1 + d.
   std::vector<FrameMatrix> m1;
   std::vector<std::vector<int>> spacing;
   for (const CharacterProblem& cp : problem.characters) {
@@ -946,216 +1308,25 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
   }
 
   SpacetimeResult result;
-  Eigen::VectorXd final_residual;
-  std::vector<char> final_inequality;
-  bool converged = false;
-  std::string stop;
+  PassOutcome outcome;
   for (;;) {
     ++result.passes;
     std::vector<Character> chars = make_characters(problem, m1, spacing);
-    Pass pass(chars, set, kinds, options, true);
-    Eigen::VectorXd x = Eigen::VectorXd::Zero(pass.unknown_total());
-    Eigen::VectorXd dx, trial;
-    pass.evaluate(x, true);
-    double F = pass.objective(x);
-    int it = 0;
-    stop = "iteration limit";
-    converged = pass.within_tolerance();
-    double lambda = 1e-3;
-    double worst_before = pass.worst_violation();
-    // Worst violation after each iteration of this pass, to see a pass that has stopped gaining.
-    std::vector<double> worst_history{worst_before};
-    bool can_densify = false;
-    if (options.densify)
-      for (const std::vector<int>& ks : spacing)
-        for (int k : ks) can_densify = can_densify || k > 1;
-    Eigen::VectorXd r_at_x;
-    while (!converged && it < options.max_iterations) {
-      pass.release_held(10 * options.inequality_tolerance);
-      double slope = pass.step(x, dx, lambda);
-      result.bandwidth = pass.bandwidth();
-      ++it;
-      // Rows the full step would cross join the working set; the step is then solved again.
-      r_at_x = pass.residual();
-      bool full_step_evaluated = false;  // the last evaluation is at x + dx
-      for (int again = 0; again < 2 && slope < 0; ++again) {
-        trial = x + dx;
-        pass.evaluate(trial, false);
-        full_step_evaluated = true;
-        if (pass.hold_blocking(r_at_x, options.inequality_tolerance) == 0) break;
-        full_step_evaluated = false;
-        pass.evaluate(x, true);
-        slope = pass.step_with_held(x, dx, lambda);
-      }
-      if (!(slope < 0)) {
-        stop = "no descent direction";
-        break;
-      }
-      double alpha = 1;
-      bool accepted = false;
-      double F_trial = F;
-      for (int ls = 0; ls < 30; ++ls, alpha *= 0.5) {
-        if (ls > 0 || !full_step_evaluated) {
-          trial = x + alpha * dx;
-          pass.evaluate(trial, false);
-        }
-        F_trial = pass.objective(trial);
-        if (F_trial <= F + 1e-4 * alpha * slope) {
-          accepted = true;
-          break;
-        }
-      }
-      if (!accepted) {
-        pass.evaluate(x, true);
-        stop = "line search failed";
-        break;
-      }
-      lambda = alpha == 1 ? std::max(lambda * 0.25, 1e-8) : std::min(lambda * 8 / alpha, 1e4);
-      const double step_norm = alpha * dx.lpNorm<Eigen::Infinity>();
-      const double decrease = F - F_trial;
-      x.swap(trial);
-      F = F_trial;
-      pass.evaluate(x, true);
-      converged = pass.within_tolerance();
-      if (options.trace) {
-        char line[200];
-        std::snprintf(line, sizeof line,
-                      "pass %d it %d: F %.6g worst %.3g alpha %.3g lambda %.2g |dx| %.3g band %d x %d active %d at %.1f ms",
-                      result.passes, it, F, pass.worst_violation(), alpha, lambda, step_norm, pass.band_size(),
-                      pass.bandwidth(), pass.active_count(),
-                      1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-        options.trace(line);
-      }
-      if (converged) break;
-      // Stalled: what is left is what this key spacing can do (or the constraints contradict).
-      const double worst_now = pass.worst_violation();
-      const bool worst_stuck = worst_now > 0.99 * worst_before;
-      worst_before = worst_now;
-      worst_history.push_back(worst_now);
-      // With denser keys to come, a pass whose worst violation gained under 5% over its last
-      // two iterations has done what its spacing can (the rest is the objective creeping
-      // down): the next pass starts from here.
-      constexpr std::size_t kStallWindow = 2;
-      if (can_densify && worst_history.size() > kStallWindow &&
-          worst_now > 0.95 * worst_history[worst_history.size() - 1 - kStallWindow]) {
-        stop = "keys too far apart";
-        break;
-      }
-      if (step_norm < 1e-10 || decrease <= (alpha == 1 ? 1e-4 : 1e-7) * (F + decrease) ||
-          (worst_stuck && decrease <= 5e-3 * (F + decrease))) {
-        stop = "no further progress";
-        break;
-      }
-    }
-    result.iterations += it;
-    result.unknowns = 0;
-    for (const Character& ch : chars)
-      for (int c = 0; c < ch.channels; ++c)
-        if (ch.free[static_cast<std::size_t>(c)]) result.unknowns += ch.layout.control_count(c);
+    Pass pass(chars, *problem.constraints, kinds, options, true);
+    outcome = iterate_pass(pass, options, can_densify(spacing, options), start, result);
     for (std::size_t k = 0; k < chars.size(); ++k) m1[k] = chars[k].values;  // m1 + d at x
-    final_residual = pass.residual();
-    final_inequality.clear();
-    for (int i = 0; i < pass.row_total(); ++i) final_inequality.push_back(pass.row_inequality(i) ? 1 : 0);
-    result.total_rows = pass.row_total();
+    report_pass(pass, chars, *problem.constraints, options, result);
     result.frames_per_key = spacing;
-
-    // Per-kind and per-constraint violations of this pass's end.
-    std::map<std::string, KindReport> by_kind;
-    std::vector<ViolatedConstraint> violated;
-    result.active_rows = 0;
-    std::map<int, ViolatedConstraint> by_constraint;
-    for (const SampleInfo& s : pass.samples()) {
-      const Constraint& con = set.constraints[static_cast<std::size_t>(s.constraint)];
-      KindReport& kr = by_kind[con.kind];
-      kr.kind = con.kind;
-      const int first = con.samples[static_cast<std::size_t>(s.sample)].frames.empty()
-                            ? 0
-                            : con.samples[static_cast<std::size_t>(s.sample)].frames[0];
-      for (int r = 0; r < s.rows; ++r) {
-        const double v = final_residual[s.row_offset + r];
-        const bool ineq = final_inequality[static_cast<std::size_t>(s.row_offset + r)] != 0;
-        ++kr.rows;
-        const bool active = !ineq || v < 0;
-        if (active) ++kr.active_rows;
-        const double viol = ineq ? std::max(0.0, -v) : std::abs(v);
-        if (ineq)
-          kr.worst_inequality = std::max(kr.worst_inequality, viol);
-        else
-          kr.worst_equality = std::max(kr.worst_equality, viol);
-        const double tol = ineq ? options.inequality_tolerance : options.equality_tolerance;
-        if (viol > tol) {
-          auto [it2, fresh] = by_constraint.try_emplace(s.constraint);
-          ViolatedConstraint& vc = it2->second;
-          if (fresh) {
-            vc.kind = con.kind;
-            vc.label = con.label;
-            vc.first_frame = vc.last_frame = first;
-            vc.in_metres = !con.points.empty();
-          }
-          vc.worst = std::max(vc.worst, viol);
-          vc.first_frame = std::min(vc.first_frame, first);
-          vc.last_frame = std::max(vc.last_frame, first);
-        }
-      }
-    }
-    result.kinds.clear();
-    for (auto& [name, kr] : by_kind) {
-      result.active_rows += kr.active_rows;
-      result.kinds.push_back(kr);
-    }
-    result.violated.clear();
-    for (auto& [index, vc] : by_constraint) result.violated.push_back(vc);
-    std::sort(result.violated.begin(), result.violated.end(),
-              [](const ViolatedConstraint& a, const ViolatedConstraint& b) { return a.worst > b.worst; });
-
-    if (converged || !options.densify) break;
-    bool denser = false;
-    for (std::vector<int>& ks : spacing)
-      for (int& k : ks)
-        if (k > 1) {
-          k = std::max(1, k / 2);
-          denser = true;
-        }
-    if (!denser) break;
+    if (outcome.converged || !options.densify || !halve_key_spacing(spacing)) break;
   }
 
-  result.status = converged ? SpacetimeStatus::Converged : SpacetimeStatus::NotConverged;
+  result.status = outcome.converged ? SpacetimeStatus::Converged : SpacetimeStatus::NotConverged;
   for (std::size_t k = 0; k < problem.characters.size(); ++k) {
     const motion::Motion& init = problem.characters[k].initial;
     result.motions.push_back({init.skeleton, m1[k], init.fps, init.name});
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  char head[160];
-  if (converged) {
-    std::snprintf(head, sizeof head, "converged in %d iterations (%d pass%s), worst violation %s", result.iterations,
-                  result.passes, result.passes == 1 ? "" : "es",
-                  format_length(result.worst_violation(), true).c_str());
-    result.message = head;
-  } else {
-    double worst = 0;
-    bool metres = true;
-    for (const ViolatedConstraint& v : result.violated)
-      if (v.worst > worst) {
-        worst = v.worst;
-        metres = v.in_metres;
-      }
-    std::snprintf(head, sizeof head, "did not converge (%s after %d iterations, %d pass%s): %zu constraint%s still violated by up to %s",
-                  stop.c_str(), result.iterations, result.passes, result.passes == 1 ? "" : "es",
-                  result.violated.size(), result.violated.size() == 1 ? "" : "s",
-                  format_length(worst, metres).c_str());
-    std::string msg = head;
-    const std::size_t shown = std::min<std::size_t>(result.violated.size(), 5);
-    for (std::size_t i = 0; i < shown; ++i) {
-      const ViolatedConstraint& v = result.violated[i];
-      msg += i == 0 ? ": " : "; ";
-      msg += v.kind + " '" + v.label + "' frame" + (v.first_frame == v.last_frame ? " " + std::to_string(v.first_frame)
-                                                                                   : "s " + std::to_string(v.first_frame) + "-" +
-                                                                                         std::to_string(v.last_frame)) +
-             " (" + format_length(v.worst, v.in_metres) + ")";
-    }
-    if (result.violated.size() > shown) msg += "; ...";
-    result.message = msg;
-  }
+  result.message = outcome.converged ? converged_message(result) : failure_message(result, outcome.stop_reason);
   return result;
 }
 

@@ -48,6 +48,7 @@ class SpacetimeNode final : public Node {
     options_.equality_tolerance = options_.inequality_tolerance = p.get<double>("tolerance_mm") / 1000;
     options_.max_iterations = static_cast<int>(p.get<std::int64_t>("max_iterations"));
     options_.densify = p.get<bool>("densify");
+    options_.validate();  // a bad setting fails when the graph loads
   }
 
   void run(RunContext& ctx) const override {

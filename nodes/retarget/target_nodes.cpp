@@ -68,7 +68,10 @@ class TargetNode final : public graph::Node {
 
 class InitialEstimateNode final : public graph::Node {
  public:
-  explicit InitialEstimateNode(const Params& p) { options_.smooth_seconds = p.get<double>("smooth_s"); }
+  explicit InitialEstimateNode(const Params& p) {
+    options_.smooth_seconds = p.get<double>("smooth_s");
+    options_.validate();  // a bad setting fails when the graph loads
+  }
 
   void run(RunContext& ctx) const override {
     const auto& m = ctx.input<motion::Motion>("motion");
@@ -116,7 +119,7 @@ class KeySpacingNode final : public graph::Node {
     options_.threshold = p.get<double>("threshold");
     options_.spacing = static_cast<int>(p.get<std::int64_t>("spacing"));
     options_.groups = p.get<std::string>("groups");
-    retarget::parse_key_groups(options_.groups);  // refuse bad text when the graph loads
+    options_.validate();  // a bad setting (or bad groups text) fails when the graph loads
   }
 
   void run(RunContext& ctx) const override {

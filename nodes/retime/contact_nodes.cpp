@@ -34,6 +34,7 @@ class ContactsNode final : public Node {
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
     options_.plants.floor = motion::parse_floor(p.get<std::string>("floor"));
     options_.support_acceleration = p.get<double>("support_acceleration");
+    options_.validate();  // a bad setting fails when the graph loads
   }
 
   void run(RunContext& ctx) const override {

@@ -1,6 +1,7 @@
 // Contacts (contacts.hpp): detected feet, per-frame touching vertices with their Jacobians, the
 // linearised friction cone and N = Jᵀ P.
 #include "kg/retime/contacts.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -77,9 +78,6 @@ void activate_pair(std::vector<bool>& on, std::size_t point) {
 // contact.
 int touch_where_supported(const motion::Motion& m, const motion::FootplantDetection& d,
                           const FootContactOptions& o, std::vector<std::vector<bool>>& active) {
-  if (!(o.support_acceleration >= 0) || !std::isfinite(o.support_acceleration))
-    throw std::invalid_argument("contacts: support_acceleration " + text::significant(o.support_acceleration, 3) +
-                                " m/s² (expected a finite number >= 0)");
   constexpr double kCaptureGravity = 9.81;  // m/s²
   const int frames = m.frame_count();
   const int k = std::max(1, static_cast<int>(std::lround(m.fps / 30.0)));
@@ -233,14 +231,21 @@ int flattest_frame(const motion::Motion& m, int foot) {
   return best;
 }
 
+void FootContactOptions::validate() const {
+  using options::require;
+  const char* o = "FootContactOptions";
+  require(options::non_negative(heel_ratio), o, "heel_ratio", heel_ratio, ">= 0 and finite");
+  require(options::positive(width_ratio), o, "width_ratio", width_ratio, "> 0 and finite");
+  require(options::non_negative(support_acceleration), o, "support_acceleration", support_acceleration,
+          ">= 0 and finite (m/s^2; 0: off)");
+  plants.validate();
+}
+
 ContactPatch foot_patch(const motion::Skeleton& sk, motion::FrameRef pose, int foot,
                         const FootContactOptions& o, ContactVertex* heel_out, ContactVertex* tip_out) {
   if (foot < 0 || foot >= sk.joint_count())
     throw std::invalid_argument("contacts: foot joint " + std::to_string(foot) + " out of range");
-  if (!(o.heel_ratio >= 0) || !std::isfinite(o.heel_ratio))
-    throw std::invalid_argument("contacts: heel_ratio must be finite and >= 0");
-  if (!(o.width_ratio > 0) || !std::isfinite(o.width_ratio))
-    throw std::invalid_argument("contacts: width_ratio must be finite and > 0");
+  o.validate();
   const auto [tip_joint, tip_local] = toe_tip(sk, foot);
   if (pose.size() != sk.channel_count())
     throw std::invalid_argument("contacts: a pose of " + std::to_string(pose.size()) + " values for " +
@@ -279,6 +284,7 @@ ContactPatch foot_patch(const motion::Skeleton& sk, motion::FrameRef pose, int f
 }
 
 Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
+  o.validate();
   m.check();
   const motion::Skeleton& sk = *m.skeleton;
   std::vector<int> feet;

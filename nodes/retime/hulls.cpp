@@ -1,6 +1,7 @@
 // Feasible timings per frame (hulls.hpp): GLPK LPs for the hull's vertices and centre, a bounded
 // least squares for frames without a hull.
 #include "kg/retime/hulls.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <glpk.h>
 
@@ -30,16 +31,6 @@ std::string point_text(const Eigen::Vector2d& x) {
 
 double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
   return a.x() * b.y() - a.y() * b.x();
-}
-
-void check_options(const HullOptions& o) {
-  auto positive = [](double v) { return v > 0 && std::isfinite(v); };
-  if (!positive(o.pddot_max) || !positive(o.pdot2_max))
-    throw std::invalid_argument("hulls: the box (pddot_max, pdot2_max) must be finite and > 0");
-  if (!positive(o.tolerance)) throw std::invalid_argument("hulls: tolerance must be finite and > 0");
-  if (o.initial_directions < 3) throw std::invalid_argument("hulls: initial_directions must be >= 3");
-  if (o.max_lps < o.initial_directions + 1)
-    throw std::invalid_argument("hulls: max_lps must be at least initial_directions + 1");
 }
 
 std::vector<bool> root_channels(const motion::Skeleton& sk) {
@@ -493,9 +484,20 @@ int Hulls::count(HullStatus status) const {
       std::count_if(frames.begin(), frames.end(), [&](const FrameHull& f) { return f.status == status; }));
 }
 
+void HullOptions::validate() const {
+  using options::require;
+  const char* o = "HullOptions";
+  require(options::positive(pddot_max), o, "pddot_max", pddot_max, "> 0 and finite (source s per output s^2)");
+  require(options::positive(pdot2_max), o, "pdot2_max", pdot2_max, "> 0 and finite");
+  require(options::positive(tolerance), o, "tolerance", tolerance, "> 0 and finite (plane units)");
+  require(initial_directions >= 3, o, "initial_directions", initial_directions, ">= 3");
+  require(max_lps >= initial_directions + 1, o, "max_lps", max_lps,
+          ">= initial_directions + 1 (" + std::to_string(initial_directions + 1) + ")");
+}
+
 Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts, std::span<const FrameTorques> torques,
                   const HullOptions& options) {
-  check_options(options);
+  options.validate();
   if (!body.skeleton) throw std::invalid_argument("hulls: the body model has no skeleton");
   if (contacts.frame_count() != static_cast<int>(torques.size()))
     throw std::invalid_argument("hulls: " + std::to_string(contacts.frame_count()) + " contact frames but " +
@@ -519,7 +521,7 @@ Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts, std::sp
 
 FrameHull build_frame_hull(const body::BodyModel& body, const ContactFrame& contact, const FrameTorques& torques,
                            const HullOptions& options) {
-  check_options(options);
+  options.validate();
   if (!body.skeleton) throw std::invalid_argument("hulls: the body model has no skeleton");
   Workspace w;
   return frame_hull(body, root_channels(*body.skeleton), contact, torques, options, w);

@@ -1,4 +1,5 @@
 #include "kg/retime/retime_clip.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -74,9 +75,26 @@ std::vector<Pin> flight_at_source_speed(const Hulls& hulls, double fps, double d
 
 }  // namespace
 
+void ClipRetimeOptions::validate() const {
+  using options::require;
+  const char* o = "ClipRetimeOptions";
+  require(options::non_negative(alpha), o, "alpha", alpha, ">= 0 and finite");
+  require(options::non_negative(beta), o, "beta", beta, ">= 0 and finite");
+  require(options::non_negative(flight_weight), o, "flight_weight", flight_weight, ">= 0 and finite");
+  require(options::non_negative(inside_tolerance), o, "inside_tolerance", inside_tolerance,
+          ">= 0 and finite (plane units)");
+  time_optimal.validate();
+  if (mode == RetimeMode::Optimise)
+    solve.validate();
+  else
+    require(solve.samples_per_frame >= 1 && solve.samples_per_frame <= kMaxSamplesPerFrame, "RetimeOptions",
+            "samples_per_frame", solve.samples_per_frame, "1 to " + std::to_string(kMaxSamplesPerFrame));
+}
+
 ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques, double fps,
                        const ClipRetimeOptions& options, const motion::Skeleton& skeleton,
                        std::span<const Eigen::VectorXd> reference) {
+  options.validate();
   const int frames = static_cast<int>(hulls.frames.size());
   if (static_cast<int>(torques.size()) != frames)
     throw std::invalid_argument("retime: " + std::to_string(torques.size()) + " frames of torques for " +

@@ -107,6 +107,7 @@ class TorqueLimitsNode final : public graph::Node {
     options_.margin = p.get<double>("margin");
     options_.floor = p.get<double>("floor");
     options_.symmetric = p.get<bool>("symmetric");
+    if (options_.margin != 0) options_.validate();  // margin 0: the body's own limits, no estimate
   }
 
   void run(RunContext& ctx) const override {
@@ -174,6 +175,7 @@ class HullsNode final : public graph::Node {
     options_.pddot_max = p.get<double>("pddot_max");
     options_.pdot2_max = p.get<double>("pdot2_max");
     gravity_from(gravity_, Eigen::Vector3d::Zero());  // refuse a bad list when the graph loads
+    options_.validate();
   }
 
   void run(RunContext& ctx) const override {
@@ -305,6 +307,9 @@ class RetimeNode final : public graph::Node {
           "knot_spacing " + shown(options_.solve.knot_spacing) + " s cuts the " + shown(duration_) +
           " s duration into more than " + std::to_string(kMaxSegments) +
           " segments (expected knot_spacing >= " + shown(duration_ / kMaxSegments) + " s)");
+    ClipRetimeOptions at_load = options_;  // without `duration`, the clip's duration scaled: known at run
+    at_load.solve.duration = duration_ > 0 ? duration_ : at_load.solve.knot_spacing;
+    at_load.validate();
   }
 
   void run(RunContext& ctx) const override {

@@ -1,4 +1,5 @@
 #include "kg/retime/retimer.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -131,31 +132,31 @@ std::string shown(double x) {
   return out.str();
 }
 
-// Throws std::invalid_argument naming the first option out of range; returns the segment count.
+// The options validated; returns the segment count.
 int checked_segments(const RetimeOptions& options) {
-  auto fail = [](const std::string& what) { throw std::invalid_argument("retime: " + what); };
-  if (!(options.duration > 0) || !std::isfinite(options.duration))
-    fail("duration " + shown(options.duration) + " s (expected a finite number > 0)");
-  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing))
-    fail("knot_spacing " + shown(options.knot_spacing) + " s (expected a finite number > 0)");
+  options.validate();
   const double segments = std::ceil(options.duration / options.knot_spacing - 1e-9);
-  if (segments > kMaxSegments)
-    fail("knot_spacing " + shown(options.knot_spacing) + " s cuts the " + shown(options.duration) +
-         " s output into " + shown(segments) + " segments (expected at most " + std::to_string(kMaxSegments) +
-         ": knot_spacing >= " + shown(options.duration / kMaxSegments) + " s)");
-  if (options.samples_per_frame < 1 || options.samples_per_frame > kMaxSamplesPerFrame)
-    fail("samples_per_frame " + std::to_string(options.samples_per_frame) + " (expected 1 to " +
-         std::to_string(kMaxSamplesPerFrame) + ")");
-  if (options.max_iterations < 1)
-    fail("max_iterations " + std::to_string(options.max_iterations) + " (expected >= 1)");
-  if (!(options.function_tolerance >= 0) || !std::isfinite(options.function_tolerance))
-    fail("function_tolerance " + shown(options.function_tolerance) + " (expected a finite number >= 0)");
-  if (!(options.gradient_tolerance >= 0) || !std::isfinite(options.gradient_tolerance))
-    fail("gradient_tolerance " + shown(options.gradient_tolerance) + " (expected a finite number >= 0)");
   return std::max(1, static_cast<int>(segments));
 }
 
 }  // namespace
+
+void RetimeOptions::validate() const {
+  using options::require;
+  const char* o = "RetimeOptions";
+  require(options::positive(duration), o, "duration", duration, "> 0 and finite (output seconds)");
+  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing, "> 0 and finite (output seconds)");
+  const double segments = std::ceil(duration / knot_spacing - 1e-9);
+  require(segments <= kMaxSegments, o, "knot_spacing", knot_spacing,
+          ">= duration / " + std::to_string(kMaxSegments) + " (" + shown(duration / kMaxSegments) + " s): it cuts the " +
+              shown(duration) + " s output into " + shown(segments) + " segments, at most " +
+              std::to_string(kMaxSegments) + " are solved");
+  require(samples_per_frame >= 1 && samples_per_frame <= kMaxSamplesPerFrame, o, "samples_per_frame",
+          samples_per_frame, "1 to " + std::to_string(kMaxSamplesPerFrame));
+  require(max_iterations >= 1, o, "max_iterations", max_iterations, ">= 1");
+  require(options::non_negative(function_tolerance), o, "function_tolerance", function_tolerance, ">= 0 and finite");
+  require(options::non_negative(gradient_tolerance), o, "gradient_tolerance", gradient_tolerance, ">= 0 and finite");
+}
 
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options) {
   const auto start = std::chrono::steady_clock::now();

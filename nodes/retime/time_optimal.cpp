@@ -1,4 +1,5 @@
 #include "kg/retime/time_optimal.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -53,12 +54,18 @@ Polygon reaching(const Polygon& poly, double fps, double lo, double hi) {
 
 }  // namespace
 
+void TimeOptimalOptions::validate() const {
+  using options::require;
+  const char* o = "TimeOptimalOptions";
+  require(options::non_negative(point_tolerance), o, "point_tolerance", point_tolerance, ">= 0 and finite");
+  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing, "> 0 and finite (output seconds)");
+}
+
 TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, const TimeOptimalOptions& options) {
+  options.validate();
   const int frames = static_cast<int>(hulls.size());
   if (frames < 2) throw std::invalid_argument("time-optimal retiming: " + std::to_string(frames) + " frames (expected >= 2)");
   if (!(fps > 0) || !std::isfinite(fps)) throw std::invalid_argument("time-optimal retiming: fps must be > 0");
-  if (!(options.knot_spacing > 0) || !std::isfinite(options.knot_spacing) || !(options.point_tolerance >= 0))
-    throw std::invalid_argument("time-optimal retiming: knot spacing must be > 0 and the point tolerance >= 0");
   std::vector<Polygon> sets(static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) {
     if (hulls[static_cast<std::size_t>(i)].empty())

@@ -1,6 +1,7 @@
 // Torque limits observed in the source motion (torque_limits.hpp): each clip's unlimited hulls give
 // the contact forces, the peaks of |τ| the limits.
 #include "kg/retime/torque_limits.hpp"
+#include "kg/base/option_check.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -93,16 +94,6 @@ bool same_channel_kinds(const motion::Joint& a, const motion::Joint& b) {
   return true;
 }
 
-void check_options(const TorqueLimitOptions& o) {
-  if (!(std::isfinite(o.margin) && o.margin > 0))
-    throw std::invalid_argument(
-        "torque limits: margin must be finite and > 0 (limits = margin x the observed "
-        "peak; >= 1 keeps the clips' own timing feasible), got " +
-        text::significant(o.margin, 4));
-  if (!(std::isfinite(o.floor) && o.floor >= 0))
-    throw std::invalid_argument("torque limits: floor must be finite and >= 0 (N m), got " + text::significant(o.floor, 4));
-}
-
 void check_clip(const body::BodyModel& body, const ClipLoads& clip, std::size_t index) {
   const std::string who = "torque limits: " + clip_name(clip, index);
   const int channels = body.skeleton->channel_count();
@@ -183,9 +174,18 @@ body::BodyModel without_torque_limits(const body::BodyModel& body, bool position
   return out;
 }
 
+void TorqueLimitOptions::validate() const {
+  using options::require;
+  const char* o = "TorqueLimitOptions";
+  require(options::positive(margin), o, "margin", margin,
+          "> 0 and finite (limits = margin x the observed peak; >= 1 keeps the clips' own timing feasible)");
+  require(options::non_negative(floor), o, "floor", floor, ">= 0 and finite (N m)");
+  hulls.validate();
+}
+
 TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::span<const ClipLoads> clips,
                                            const TorqueLimitOptions& options) {
-  check_options(options);
+  options.validate();
   body::check_body_model(body, "torque limits");
   if (clips.empty()) throw std::invalid_argument("torque limits: no clip to observe");
   for (std::size_t i = 0; i < clips.size(); ++i) check_clip(body, clips[i], i);

@@ -107,7 +107,10 @@ std::string figure_text(double stature) {
   return s.str();
 }
 
-void check_options(const ClimbOptions& options) {
+}  // namespace
+
+void ClimbOptions::validate() const {
+  const ClimbOptions& options = *this;
   check_range("climb", "rungs", options.rungs, kClimbRungsRange.min, kClimbRungsRange.max, "");
   check_range("climb", "rung_spacing", options.rung_spacing, kRungSpacingRange.min, kRungSpacingRange.max,
               "m");
@@ -118,6 +121,8 @@ void check_options(const ClimbOptions& options) {
   check_range("climb", "stature", options.stature, kStatureRange.min, kStatureRange.max, "m");
   check_range("climb", "fps", options.fps, kFpsRange.min, kFpsRange.max, "frames/s");
 }
+
+namespace {
 
 // Timeline: stand on rung 1, then per rung climbed a hand move followed by a foot move of the
 // other side (the right foot first), and one more pair bringing the trailing hand and foot
@@ -495,7 +500,7 @@ std::string Hold::name() const {
 }
 
 Synthesis synthesize_climb(const ClimbOptions& options) {
-  check_options(options);
+  options.validate();
   Synthesis out;
   out.figure = make_figure(options.stature);
   PoseWriter writer(out.figure);

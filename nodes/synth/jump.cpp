@@ -40,13 +40,18 @@ struct JumpSetting {
   double z_stand = 0, y_stand = 0;
 };
 
-void check_options(const JumpOptions& options) {
+}  // namespace
+
+void JumpOptions::validate() const {
+  const JumpOptions& options = *this;
   check_range("jump", "height", options.height, kJumpHeightRange.min, kJumpHeightRange.max, "m");
   check_range("jump", "distance", options.distance, kJumpDistanceRange.min, kJumpDistanceRange.max, "m");
   check_range("jump", "stature", options.stature, kStatureRange.min, kStatureRange.max, "m");
   check_range("jump", "fps", options.fps, kFpsRange.min, kFpsRange.max, "frames/s");
   check_range("jump", "gravity", options.gravity, kGravityRange.min, kGravityRange.max, "m/s^2");
 }
+
+namespace {
 
 BodyPose standing_pose(const JumpSetting& s, double z) {
   BodyPose p;
@@ -549,7 +554,7 @@ void record_plants(const JumpSetting& s, const Phases& p, double fps, int frames
 }  // namespace
 
 Synthesis synthesize_jump(const JumpOptions& options) {
-  check_options(options);
+  options.validate();
   Synthesis out;
   out.figure = make_figure(options.stature);
   PoseWriter writer(out.figure);

@@ -39,6 +39,13 @@ class SynthesizeNode final : public graph::Node {
                                   std::to_string(static_cast<int>(steps.min)) + " to " +
                                   std::to_string(static_cast<int>(steps.max)) +
                                   (kind_ == "climb" ? " (rungs climbed)" : " (foot landings)"));
+    // The chosen figure's options, checked when the graph loads.
+    if (kind_ == "jump")
+      jump_options_.validate();
+    else if (kind_ == "climb")
+      climb_.validate();
+    else
+      walk_.validate();
   }
 
   void run(graph::RunContext& ctx) const override {

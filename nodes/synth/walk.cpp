@@ -131,12 +131,17 @@ class FootTrack {
   std::vector<double> lift_;
 };
 
-void check_options(const WalkOptions& options) {
+}  // namespace
+
+void WalkOptions::validate() const {
+  const WalkOptions& options = *this;
   check_range("walk", "steps", options.steps, kStepsRange.min, kStepsRange.max, "");
   check_range("walk", "speed", options.speed, kSpeedRange.min, kSpeedRange.max, "m/s");
   check_range("walk", "stature", options.stature, kStatureRange.min, kStatureRange.max, "m");
   check_range("walk", "fps", options.fps, kFpsRange.min, kFpsRange.max, "frames/s");
 }
+
+namespace {
 
 // Timeline: stand still, then the pelvis accelerates over one step time to `speed` as the first
 // (right) heel strikes; steps follow every T; the closing step lands as the pelvis stops.
@@ -453,7 +458,7 @@ std::string FootPlant::name() const {
 }
 
 Synthesis synthesize_walk(const WalkOptions& options) {
-  check_options(options);
+  options.validate();
   Synthesis out;
   out.figure = make_figure(options.stature);
   const Figure& fig = out.figure;

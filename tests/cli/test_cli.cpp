@@ -509,3 +509,28 @@ TEST_CASE("a missing built-in node module is a plugin error (exit 4)", "[cli]") 
   // --help needs no module
   CHECK(run_program(dir / "bin" / "kinegraph", {"--help"}).code == 0);
 }
+
+TEST_CASE("a bad option of a built-in node is refused at load with file:line, before anything runs", "[cli]") {
+  TempDir dir;
+  const fs::path out = dir.path() / "never.bvh";
+  const std::string text =
+      "version: 1\n"                                                        // 1
+      "nodes:\n"                                                            // 2
+      "  walk: {type: motion.synthesize}\n"                                 // 3
+      "  holds: {type: retarget.holds, params: {points: \"\"}}\n"           // 4
+      "  save: {type: io.export_bvh, params: {path: \"" + out.string() + "\"}}\n"  // 5
+      "connections:\n"                                                      // 6
+      "  - {from: walk.motion, to: holds.motion}\n"                         // 7
+      "  - {from: walk.motion, to: holds.motion2}\n"                        // 8
+      "  - {from: walk.motion, to: save.motion}\n";                         // 9
+  const fs::path graph = dir.write("bad_option.yaml", text);
+  for (const char* verb : {"validate", "run"}) {
+    const Result r = kinegraph({verb, graph.string()});
+    INFO(verb << "\n" << show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err, StartsWith("kinegraph: " + graph.string() + ":4:"));
+    CHECK_THAT(r.err, Contains("node 'holds' (retarget.holds)") && Contains("HoldOptions.points_a = []") &&
+                          Contains("expected at least one point"));
+  }
+  CHECK_FALSE(fs::exists(out));  // refused before any node ran
+}

@@ -578,8 +578,9 @@ TEST_CASE("retiming graphs on bad input: a non-zero exit, what is wrong, and not
     INFO(show(r));
     CHECK(r.code == 1);
     CHECK_THAT(failure_line(r.err), Catch::Contains("node retime (retime.retime) failed") &&
-                                        Catch::Contains("retime: knot_spacing 0.001 s cuts the ") &&
-                                        Catch::Contains("(expected at most 4096: knot_spacing >= "));
+                                        Catch::Contains("RetimeOptions.knot_spacing = 0.001: expected >= "
+                                                        "duration / 4096 (") &&
+                                        Catch::Contains("segments, at most 4096 are solved"));
     nothing_written();
   }
 

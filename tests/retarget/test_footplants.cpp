@@ -152,7 +152,8 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
   CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("hysteresis"));
   o = {};
   o.height_threshold = 0;
-  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("thresholds must be positive"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o),
+                    Catch::Contains("FootplantOptions.height_threshold = 0.0"));
 
   // A skeleton without recognisable feet.
   auto sk = std::make_shared<motion::Skeleton>();

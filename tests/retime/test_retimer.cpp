@@ -254,24 +254,24 @@ TEST_CASE("retime refuses options out of range, naming the option and the range 
   auto add = [&bad](RetimeOptions options, std::string message) {
     bad.push_back({std::move(options), std::move(message)});
   };
-  add({.duration = 0}, "retime: duration 0 s (expected a finite number > 0)");
-  add({.duration = -2}, "retime: duration -2 s (expected a finite number > 0)");
-  add({.duration = nan}, "retime: duration nan s (expected a finite number > 0)");
-  add({.duration = inf}, "retime: duration inf s (expected a finite number > 0)");
-  add({.duration = 2, .knot_spacing = 0}, "retime: knot_spacing 0 s (expected a finite number > 0)");
-  add({.duration = 2, .knot_spacing = nan}, "retime: knot_spacing nan s (expected a finite number > 0)");
+  add({.duration = 0}, "RetimeOptions.duration = 0.0: expected > 0 and finite");
+  add({.duration = -2}, "RetimeOptions.duration = -2.0: expected > 0 and finite");
+  add({.duration = nan}, "RetimeOptions.duration = nan: expected > 0 and finite");
+  add({.duration = inf}, "RetimeOptions.duration = inf: expected > 0 and finite");
+  add({.duration = 2, .knot_spacing = 0}, "RetimeOptions.knot_spacing = 0.0: expected > 0 and finite");
+  add({.duration = 2, .knot_spacing = nan}, "RetimeOptions.knot_spacing = nan: expected > 0 and finite");
   add({.duration = 2, .knot_spacing = 1e-300},
-      "retime: knot_spacing 1e-300 s cuts the 2 s output into 2e+300 segments (expected at most 4096: "
-      "knot_spacing >= 0.000488281 s)");
-  add({.duration = 2, .knot_spacing = 2.0 / 4097}, "into 4097 segments (expected at most 4096");
-  add({.duration = 1e6}, "into 1e+07 segments (expected at most 4096: knot_spacing >= 244.141 s)");
-  add({.duration = 2, .samples_per_frame = 0}, "retime: samples_per_frame 0 (expected 1 to 1000)");
-  add({.duration = 2, .max_iterations = 0}, "retime: max_iterations 0 (expected >= 1)");
-  add({.duration = 2, .max_iterations = -5}, "retime: max_iterations -5 (expected >= 1)");
+      "RetimeOptions.knot_spacing = 1e-300: expected >= duration / 4096 (0.000488281 s): it cuts the 2 s "
+      "output into 2e+300 segments, at most 4096 are solved");
+  add({.duration = 2, .knot_spacing = 2.0 / 4097}, "into 4097 segments, at most 4096");
+  add({.duration = 1e6}, "expected >= duration / 4096 (244.141 s): it cuts the 1e+06 s output into 1e+07 segments");
+  add({.duration = 2, .samples_per_frame = 0}, "RetimeOptions.samples_per_frame = 0: expected 1 to 1000");
+  add({.duration = 2, .max_iterations = 0}, "RetimeOptions.max_iterations = 0: expected >= 1");
+  add({.duration = 2, .max_iterations = -5}, "RetimeOptions.max_iterations = -5: expected >= 1");
   add({.duration = 2, .function_tolerance = -1},
-      "retime: function_tolerance -1 (expected a finite number >= 0)");
+      "RetimeOptions.function_tolerance = -1.0: expected >= 0 and finite");
   add({.duration = 2, .gradient_tolerance = nan},
-      "retime: gradient_tolerance nan (expected a finite number >= 0)");
+      "RetimeOptions.gradient_tolerance = nan: expected >= 0 and finite");
   add({.duration = 2, .pins = {{.source_time = nan, .output_time = 1}}},
       "time warp: pin 0 (source nan s at output 1 s): expected finite times");
   add({.duration = 2,

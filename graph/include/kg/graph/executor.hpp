@@ -59,6 +59,9 @@ struct RunOptions {
   bool keep_outputs = true;
   // Called with (node id, message) for node log lines and failures; default prints to stderr.
   std::function<void(const std::string&, const std::string&)> on_log{};
+  // Every setting is valid (jobs < 1 means 1): here so that every Options struct has its
+  // validate() (DESIGN.md 15); a future field with a range checks it here.
+  void validate() const {}
 };
 
 RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptions& options = {});

@@ -58,6 +58,9 @@ struct BvhWriteOptions {
   std::string units = "source";
   // Digits after the decimal point of every value (1..12); trailing zeros are dropped.
   int precision = 6;
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // Writes `motion` (skeleton.hpp's conventions) as BVH: file axes (file_to_world is not

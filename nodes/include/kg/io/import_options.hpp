@@ -25,6 +25,9 @@ struct ImportOptions {
   std::string up = "auto";
   // Frames per second overriding the file's header; 0 keeps the file's.
   double fps = 0;
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // What every importer returns (import_bvh, import_asf_amc, import_motion): a clip brought to
@@ -39,6 +42,8 @@ struct ImportedMotion {
 
 // Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.
 double metres_per_unit(const std::string& units);
+// Whether metres_per_unit knows `units`.
+bool known_unit(const std::string& units);
 
 // Brings `motion`, read in its file's units and axes (lengths in file units, file_to_world
 // identity, angles already radians), to skeleton.hpp's conventions, in place:

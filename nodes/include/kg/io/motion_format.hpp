@@ -27,6 +27,9 @@ struct MotionWriteOptions {
   // skeleton->source_unit_metres), "m", "cm", "mm" or "inch".
   std::string units = "source";
   int precision = 6;  // digits after the decimal point, 1..12 (trailing zeros dropped)
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // Reads the motion file `path` (and, for formats keeping the skeleton apart, `skeleton_path`:

@@ -50,6 +50,9 @@ struct FootplantOptions {
                                    // position are trimmed off (0: no trimming)
   double rest_window_s = 1.0;      // s, >= 0 (0: one rest level per point for the whole clip)
   int character = 0;               // written into the PointRefs
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 struct PlantPoint {

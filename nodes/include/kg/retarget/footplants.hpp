@@ -35,6 +35,9 @@ struct PlantConstraintOptions {
   // Horizontal plant positions stay where the source had them (the paper's fixed footprints).
   // Empty: 1.
   std::function<double(const PointRef& point, int frame)> height_scale{};
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // height_scale for plants moved onto `target`: height_factor (target.hpp) at frame / fps seconds.

@@ -30,6 +30,9 @@ struct HoldOptions {
   double max_distance = 0.15;    // m, to enter a hold
   double hysteresis = 1.25;      // leave at max_distance * hysteresis (>= 1)
   double min_duration_s = 0.2;   // shorter spans are dropped
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 struct HoldSpan {

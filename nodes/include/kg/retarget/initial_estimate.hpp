@@ -50,6 +50,9 @@ namespace kg::retarget {
 
 struct InitialEstimateOptions {
   double smooth_seconds = 0.15;  // Gaussian sigma of the low-pass on the added shift; 0: none
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 struct InitialEstimate {

@@ -46,6 +46,9 @@ struct PerFrameIkOptions {
   int max_iterations = 50;  // Levenberg-Marquardt iterations per frame
   double tolerance = 1e-4;  // a frame's rows are met when every |r| (equality) and max(0, -r)
                             // (inequality) is at most this: metres, or radians for channel rows
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 struct PerFrameIkResult {

@@ -67,17 +67,57 @@ struct CharacterProblem {
 
 
 struct SpacetimeOptions {
-  double epsilon = 1e-4;               // damping weight of x^T M x (dimensionless, see above)
+  double epsilon = 1e-4;               // damping weight of x^T M x (dimensionless, see above; > 0)
   // Converged when every row is within these. 1 mm is the acceptance figure (the paper
   // met a quarter inch); a tighter tolerance that the key spacing cannot reach makes the solve
   // densify keys (step 5), which buys accuracy with high frequencies.
-  double equality_tolerance = 1e-3;    // |r| of every equality row, metres or radians
-  double inequality_tolerance = 1e-3;  // max(0, -r) of every inequality row
-  int max_iterations = 40;             // Gauss-Newton iterations per pass
+  double equality_tolerance = 1e-3;    // |r| of every equality row, metres or radians (> 0)
+  double inequality_tolerance = 1e-3;  // max(0, -r) of every inequality row (> 0)
+  int max_iterations = 40;             // Gauss-Newton iterations per pass (>= 0; 0: m1 as it is)
   bool densify = true;                 // §4 step 5: retry with halved key spacing when violated
+
+  // The Levenberg-Marquardt term lambda M added to the matrix of each step (not to F; M as in
+  // the header comment, so lambda is dimensionless like epsilon). Every pass starts at
+  // initial_damping; an accepted full step (alpha = 1) multiplies lambda by damping_decrease,
+  // down to min_damping; a shortened one by damping_increase / alpha, up to max_damping.
+  double initial_damping = 1e-3;   // >= 0, finite
+  double damping_decrease = 0.25;  // in (0, 1]
+  double damping_increase = 8;     // >= 1, finite
+  double min_damping = 1e-8;       // >= 0, finite
+  double max_damping = 1e4;        // >= min_damping, finite
+  // The backtracking (Armijo) line search on F: alpha = 1, line_search_shrink, its square, ...,
+  // line_search_steps lengths at most; alpha is taken when F(x + alpha dx) <= F(x) + armijo alpha
+  // (the slope of F along dx). None taken: the pass stops ("line search failed").
+  double armijo = 1e-4;             // in (0, 1)
+  double line_search_shrink = 0.5;  // in (0, 1)
+  int line_search_steps = 30;       // >= 1
+  // The working set (header comment): a step is solved again at most working_set_resolves times
+  // with the inequality rows it would cross (0: never); a held row leaves the set once its
+  // residual exceeds working_set_release x inequality_tolerance.
+  int working_set_resolves = 2;       // >= 0
+  double working_set_release = 10.0;  // >= 0, finite
+  // Stopping tests after an accepted step that did not converge ("no further progress"): the
+  // step's max-norm alpha |dx| below min_step (units of the controls: metres or radians); F
+  // decreased by at most min_decrease (after a full step) or min_decrease_short (after a
+  // shortened one) of its value before the step; or the worst violation stuck (above stuck_ratio
+  // times the previous iteration's) while F decreased by at most stuck_decrease of its value.
+  double min_step = 1e-10;           // >= 0, finite
+  double min_decrease = 1e-4;        // in [0, 1)
+  double min_decrease_short = 1e-7;  // in [0, 1)
+  double stuck_ratio = 0.99;         // in [0, 1]
+  double stuck_decrease = 5e-3;      // in [0, 1)
+  // With denser keys still to try (densify), a pass stops ("keys too far apart") when its worst
+  // violation is above stall_ratio times its value stall_window iterations before: it has done
+  // what its spacing can, the next pass starts from there.
+  int stall_window = 2;       // iterations, >= 1
+  double stall_ratio = 0.95;  // in [0, 1]
   // Called with one line per iteration (objective, worst violation, step length, active rows)
   // when set; for diagnostics.
   std::function<void(const std::string&)> trace{};
+
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15).
+  void validate() const;
 };
 
 struct SpacetimeProblem {
@@ -130,9 +170,10 @@ struct SpacetimeResult {
 };
 
 // Solves. Throws std::invalid_argument (naming the constraint's label where there is one) for a
-// malformed problem: no characters, more characters than given, mismatched frame counts or
-// channel layouts, an unknown kind, a constraint its kind refuses, a frame, joint or channel out
-// of range. Everything else (not converged) is in the result.
+// malformed problem: options that validate() refuses, no characters, more characters than
+// given, mismatched frame counts or channel layouts, an unknown kind, a constraint its kind
+// refuses, a frame, joint or channel out of range. Everything else (not converged) is in the
+// result.
 SpacetimeResult solve_spacetime(const SpacetimeProblem& problem);
 
 // Diagonal of M for one skeleton (channel_count() entries, see the header comment), m^2 per

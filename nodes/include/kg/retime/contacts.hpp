@@ -124,6 +124,9 @@ struct FootContactOptions {
     o.speed_threshold = 0.3;
     return o;
   }();
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // The rectangle of a foot (see the header comment) built in `pose` (skeleton.channel_count()

@@ -65,6 +65,9 @@ struct HullOptions {
   double tolerance = 1e-3;     // plane units (> 0): how far the true hull may reach beyond an edge
   int initial_directions = 8;  // >= 3, swept counter-clockwise from straight down
   int max_lps = 256;           // per frame (>= initial_directions + 1); reaching it is reported
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 enum class HullStatus : std::uint8_t {

@@ -46,6 +46,11 @@ struct ClipRetimeOptions {
   double flight_weight = 1;         // multiplies alpha on flight frames (ObjectiveWeights::flight)
   double inside_tolerance = 0.01;   // plane units: a timing this close to its hull counts as inside
   TimeOptimalOptions time_optimal{};
+  // Throws std::invalid_argument naming the field, its value and its range (DESIGN.md 15):
+  // alpha, beta, flight_weight and inside_tolerance >= 0 and finite, time_optimal.validate(),
+  // and in Optimise mode solve.validate() (the time-optimal mode takes its duration from the
+  // hulls and of `solve` only samples_per_frame, checked alone).
+  void validate() const;
 };
 
 struct ClipRetime {

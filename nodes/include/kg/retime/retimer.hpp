@@ -68,6 +68,9 @@ struct RetimeOptions {
   // before it moved and never stop a large one.
   double function_tolerance = 1e-10;
   double gradient_tolerance = 1e-10;
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // The grid of the trapezoid rule over a warp's output time [0, duration]: segment s of the warp

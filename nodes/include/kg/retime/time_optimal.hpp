@@ -31,6 +31,9 @@ struct TimeOptimalOptions {
   double point_tolerance = 0.05;  // relative half-width in ṗ² of the box around a point hull
   double knot_spacing = 0.1;      // output seconds between the fitted warp's controls (> 0); a
                                   // playback needing more than kMaxSegments of them is refused
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 struct TimeOptimalResult {

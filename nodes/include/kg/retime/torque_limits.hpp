@@ -94,6 +94,9 @@ struct TorqueLimitOptions {
   bool position_channels = false;  // also bound non-root position channels (newtons)
   InfeasibleFrames infeasible = InfeasibleFrames::Skip;
   HullOptions hulls{};  // for the unlimited hulls whose centres give λ
+  // Throws std::invalid_argument naming the field, its value and its range when a field is out
+  // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
+  void validate() const;
 };
 
 // How a frame was observed.

@@ -178,6 +178,9 @@ struct WalkOptions {
   double speed = 1.3;     // steady walking speed, m/s (start and stop ramp to and from rest)
   double stature = 1.75;  // m
   double fps = 120;       // frames per second
+  // Throws std::invalid_argument naming the option, its value and its range (the k*Range
+  // constants above) when one is out of range or not finite; node factories call it at load.
+  void validate() const;
 };
 
 struct JumpOptions {
@@ -189,6 +192,9 @@ struct JumpOptions {
   double stature = 1.75;  // m
   double fps = 120;
   double gravity = 9.81;  // m/s^2
+  // Throws std::invalid_argument naming the option, its value and its range (the k*Range
+  // constants above) when one is out of range or not finite; node factories call it at load.
+  void validate() const;
 };
 
 struct ClimbOptions {
@@ -198,6 +204,9 @@ struct ClimbOptions {
   double ladder_distance = 0.50;  // m, the ladder plane's distance ahead of the root's line (z = 0)
   double stature = 1.75;          // m
   double fps = 120;
+  // Throws std::invalid_argument naming the option, its value and its range (the k*Range
+  // constants above) when one is out of range or not finite; node factories call it at load.
+  void validate() const;
 };
 
 // All throw std::invalid_argument naming the parameter, its value and its range when an option
