@@ -26,10 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "kg/body/body_build.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"

@@ -23,16 +23,16 @@
 
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
-#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/motion/resample.hpp"
+#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
 #include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/key_spacing.hpp"
-#include "kg/retarget/target.hpp"
 #include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 #include "kg/retarget/spacetime.hpp"
+#include "kg/retarget/target.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;
@@ -84,10 +84,11 @@ void add_joint_limits(ConstraintSet& set, const motion::Motion& source) {
     const auto [j, k] = sk.channel_owner(c);
     if (!motion::is_rotation(sk.joint(j).channels[static_cast<std::size_t>(k)].kind)) continue;
     const double widen = 10 * M_PI / 180;
-    Constraint lim{.kind = "parameter_range",
-                   .label = sk.channel_name(c) + " limit",
-                   .channels = {{0, c}},
-                   .params = {source.values.col(c).minCoeff() - widen, source.values.col(c).maxCoeff() + widen}};
+    Constraint lim{
+        .kind = "parameter_range",
+        .label = sk.channel_name(c) + " limit",
+        .channels = {{0, c}},
+        .params = {source.values.col(c).minCoeff() - widen, source.values.col(c).maxCoeff() + widen}};
     for (int f = 0; f < source.frame_count(); ++f) lim.samples.push_back({{f}});
     set.constraints.push_back(lim);
   }
@@ -108,7 +109,8 @@ void run(const Case& c, const ConstraintKindTable& table, int repeats) {
   problem.characters.push_back({.initial = c.m1, .frames_per_key = c.frames_per_key});
   problem.constraints = &c.set;
   problem.kinds = [&](const std::string& n) { return table.find(n); };
-  if (std::getenv("KG_SPACETIME_TRACE")) problem.options.trace = [](const std::string& l) { std::printf("    %s\n", l.c_str()); };
+  if (std::getenv("KG_SPACETIME_TRACE"))
+    problem.options.trace = [](const std::string& l) { std::printf("    %s\n", l.c_str()); };
   const std::vector<motion::Motion> before{c.m1};
   const ViolationSummary v0 = summarize_violations(c.set, table, before);
   SpacetimeResult r;
@@ -124,8 +126,8 @@ void run(const Case& c, const ConstraintKindTable& table, int repeats) {
   std::printf("  before: worst violation %.2f cm (", v0.worst() * 100);
   for (const KindViolation& k : v0.kinds) std::printf(" %s %.2f", k.kind.c_str(), k.worst * 100);
   std::printf(" )\n");
-  std::printf("  solve: %.1f ms (best of %d), %d iterations, %d pass(es), bandwidth %d, %s\n", best * 1000, repeats,
-              r.iterations, r.passes, r.bandwidth, r.message.c_str());
+  std::printf("  solve: %.1f ms (best of %d), %d iterations, %d pass(es), bandwidth %d, %s\n", best * 1000,
+              repeats, r.iterations, r.passes, r.bandwidth, r.message.c_str());
   // Checked independently with the constraint library's own evaluation of the result.
   const ViolationSummary v = summarize_violations(c.set, table, r.motions);
   for (const KindViolation& k : v.kinds)
@@ -139,12 +141,16 @@ void run(const Case& c, const ConstraintKindTable& table, int repeats) {
   const JerkFigures added_ik = rms_jerk_of_displacement(ik.motion, c.m1);
   const double increase_st = rms_jerk(r.motions[0]).rotation - rms_jerk(c.m1).rotation;
   const double increase_ik = rms_jerk(ik.motion).rotation - rms_jerk(c.m1).rotation;
-  std::printf("  per-frame IK: %.1f ms, worst violation %.4f mm\n", ik.seconds * 1000, ik.worst_violation * 1000);
-  std::printf("  jerk of the added displacement (rotations): spacetime %.1f rad/s^3, per-frame IK %.1f rad/s^3: "
-              "ratio %.1f%% (target <= 20%%)\n",
-              added_st.rotation, added_ik.rotation, 100 * added_st.rotation / std::max(added_ik.rotation, 1e-12));
-  std::printf("  RMS jerk increase over the initial motion (rotations): spacetime %+.1f, per-frame IK %+.1f rad/s^3\n",
-              increase_st, increase_ik);
+  std::printf("  per-frame IK: %.1f ms, worst violation %.4f mm\n", ik.seconds * 1000,
+              ik.worst_violation * 1000);
+  std::printf(
+      "  jerk of the added displacement (rotations): spacetime %.1f rad/s^3, per-frame IK %.1f rad/s^3: "
+      "ratio %.1f%% (target <= 20%%)\n",
+      added_st.rotation, added_ik.rotation, 100 * added_st.rotation / std::max(added_ik.rotation, 1e-12));
+  std::printf(
+      "  RMS jerk increase over the initial motion (rotations): spacetime %+.1f, per-frame IK %+.1f "
+      "rad/s^3\n",
+      increase_st, increase_ik);
 }
 
 Case synth_case(int steps, double legs_factor, const char* name) {
@@ -161,8 +167,10 @@ Case synth_case(int steps, double legs_factor, const char* name) {
   c.m1.values.leftCols(3) *= s;
   ConstraintSet set;
   for (const synth::FootPlant& p : walk.plants) {
-    Constraint k{.kind = "position", .label = p.name() + " plant " + std::to_string(p.first_frame),
-                 .points = {{0, p.joint, p.local}}, .params = {p.world.x(), p.world.y(), p.world.z()}};
+    Constraint k{.kind = "position",
+                 .label = p.name() + " plant " + std::to_string(p.first_frame),
+                 .points = {{0, p.joint, p.local}},
+                 .params = {p.world.x(), p.world.y(), p.world.z()}};
     for (int f = p.first_frame; f <= p.last_frame; ++f) k.samples.push_back({{f}});
     set.constraints.push_back(k);
   }
@@ -170,7 +178,9 @@ Case synth_case(int steps, double legs_factor, const char* name) {
     for (const auto& [joint, local] :
          {std::pair{walk.figure.foot[static_cast<std::size_t>(side)], walk.figure.heel_local},
           std::pair{walk.figure.toe[static_cast<std::size_t>(side)], walk.figure.toe_tip_local}}) {
-      Constraint k{.kind = "region", .label = "above floor", .points = {{0, joint, local}},
+      Constraint k{.kind = "region",
+                   .label = "above floor",
+                   .points = {{0, joint, local}},
                    .params = {-kInf, 0.0, -kInf, kInf, kInf, kInf}};
       for (int f = 0; f < walk.motion.frame_count(); ++f) k.samples.push_back({{f}});
       set.constraints.push_back(k);
@@ -207,7 +217,8 @@ Case cmu_case(const motion::Motion& src, const char* name) {
   c.m1 = initial_estimate(src, target, &on_target, finder).motion;
   c.set = on_target;
   c.frames_per_key = choose_key_spacing(src, {}).frames_per_key;
-  std::printf("  %s: %zu plants detected; keys every %d frames\n", name, d.plants.size(), c.frames_per_key.front());
+  std::printf("  %s: %zu plants detected; keys every %d frames\n", name, d.plants.size(),
+              c.frames_per_key.front());
   return c;
 }
 
@@ -244,8 +255,10 @@ void compare_linear_algebra(int n, int b) {
   llt.factorize(A);
   const Eigen::VectorXd z = llt.solve(rhs);
   const double t_llt = now() - t0;
-  std::printf("  n %d, bandwidth %d: banded Cholesky %.2f ms; SimplicialLLT %.2f ms (+ %.2f ms ordering); |diff| %.1e\n",
-              n, b, t_band * 1000, t_llt * 1000, t_analyze * 1000, (y - z).cwiseAbs().maxCoeff());
+  std::printf(
+      "  n %d, bandwidth %d: banded Cholesky %.2f ms; SimplicialLLT %.2f ms (+ %.2f ms ordering); |diff| "
+      "%.1e\n",
+      n, b, t_band * 1000, t_llt * 1000, t_analyze * 1000, (y - z).cwiseAbs().maxCoeff());
 }
 
 #ifdef KG_HAVE_CERES
@@ -255,13 +268,15 @@ class LinearRow final : public ceres::CostFunction {
  public:
   LinearRow(double r0, std::vector<Eigen::RowVectorXd> blocks) : r0_(r0), blocks_(std::move(blocks)) {
     set_num_residuals(1);
-    for (const Eigen::RowVectorXd& b : blocks_) mutable_parameter_block_sizes()->push_back(static_cast<int>(b.size()));
+    for (const Eigen::RowVectorXd& b : blocks_)
+      mutable_parameter_block_sizes()->push_back(static_cast<int>(b.size()));
   }
   bool Evaluate(double const* const* x, double* r, double** jacobians) const override {
     double v = r0_;
     for (std::size_t b = 0; b < blocks_.size(); ++b) {
       v += blocks_[b].dot(Eigen::Map<const Eigen::VectorXd>(x[b], blocks_[b].size()));
-      if (jacobians && jacobians[b]) Eigen::Map<Eigen::RowVectorXd>(jacobians[b], blocks_[b].size()) = blocks_[b];
+      if (jacobians && jacobians[b])
+        Eigen::Map<Eigen::RowVectorXd>(jacobians[b], blocks_[b].size()) = blocks_[b];
     }
     r[0] = v;
     return true;
@@ -283,7 +298,8 @@ class Damping final : public ceres::CostFunction {
     const auto n = scale_.size();
     Eigen::Map<Eigen::VectorXd>(r, n) = scale_.cwiseProduct(Eigen::Map<const Eigen::VectorXd>(x[0], n));
     if (jacobians && jacobians[0]) {
-      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobians[0], n, n);
+      Eigen::Map<Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>> J(jacobians[0], n,
+                                                                                           n);
       J.setZero();
       J.diagonal() = scale_;
     }
@@ -323,9 +339,11 @@ void compare_with_ceres(const Case& c, const ConstraintKindTable& table) {
     ours = solve_spacetime(problem);
     best = std::min(best, now() - t0);
   }
-  std::printf("  ours: %.1f ms per iteration over the whole solve (FK, analytic Jacobians, assembly, banded Cholesky, "
-              "line search)\n",
-              1000 * best / std::max(1, ours.iterations));
+  std::printf(
+      "  ours: %.1f ms per iteration over the whole solve (FK, analytic Jacobians, assembly, banded "
+      "Cholesky, "
+      "line search)\n",
+      1000 * best / std::max(1, ours.iterations));
   // Parameter blocks of `width` channels at one control time: every channel (66: Ceres sees the
   // band's dense blocks) or one (Ceres sees every zero).
   for (const int width : {channels, 1}) {
@@ -369,12 +387,13 @@ void compare_with_ceres(const Case& c, const ConstraintKindTable& table) {
     ceres::Solver::Summary summary;
     ceres::Solve(options, &ceres_problem, &summary);
     const int iterations = std::max<int>(1, static_cast<int>(summary.iterations.size()) - 1);
-    std::printf("  Ceres %s SPARSE_NORMAL_CHOLESKY (%s), 1 thread, %d active rows, %d unknowns in blocks of %d: "
-                "%.1f ms per iteration (linear solver %.1f ms)\n",
-                CERES_VERSION_STRING,
-                summary.sparse_linear_algebra_library_type == ceres::SUITE_SPARSE ? "SuiteSparse" : "other", rows,
-                layout.unknown_count(), width, 1000 * summary.minimizer_time_in_seconds / iterations,
-                1000 * summary.linear_solver_time_in_seconds / iterations);
+    std::printf(
+        "  Ceres %s SPARSE_NORMAL_CHOLESKY (%s), 1 thread, %d active rows, %d unknowns in blocks of %d: "
+        "%.1f ms per iteration (linear solver %.1f ms)\n",
+        CERES_VERSION_STRING,
+        summary.sparse_linear_algebra_library_type == ceres::SUITE_SPARSE ? "SuiteSparse" : "other", rows,
+        layout.unknown_count(), width, 1000 * summary.minimizer_time_in_seconds / iterations,
+        1000 * summary.linear_solver_time_in_seconds / iterations);
   }
 }
 #endif
@@ -384,7 +403,8 @@ void compare_with_ceres(const Case& c, const ConstraintKindTable& table) {
 int main(int argc, char** argv) {
   if (argc > 1) g_only = argv[1];
   const ConstraintKindTable table = ConstraintKindTable::builtin();
-  std::printf("== synthesized walk, 30 Hz, to 60%% (thighs and shanks 51%%): fixed plants, floor, joint limits ==\n");
+  std::printf(
+      "== synthesized walk, 30 Hz, to 60%% (thighs and shanks 51%%): fixed plants, floor, joint limits ==\n");
   // ~112 frames: 5 steps.
   const Case short_legs = synth_case(5, 0.85, "synth walk 60%, short legs");
   run(short_legs, table, 5);
@@ -396,8 +416,9 @@ int main(int argc, char** argv) {
 
   const std::string walk_16_15 = std::string(KG_DATA_DIR) + "/cmu/bvh_motionbuilder/16_15.bvh";
   if (std::filesystem::exists(walk_16_15)) {
-    std::printf("== CMU 16_15 (walk, MotionBuilder BVH) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor "
-                "plants, floor, joint limits; the library's initial estimate ==\n");
+    std::printf(
+        "== CMU 16_15 (walk, MotionBuilder BVH) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor "
+        "plants, floor, joint limits; the library's initial estimate ==\n");
     const motion::Motion src = motion::resample(io::import_motion(walk_16_15, "", {}).motion, 30.0);
     run(cmu_case(src, "16_15 60%, short legs"), table, 5);
   } else {
@@ -406,8 +427,9 @@ int main(int argc, char** argv) {
   const std::string asf = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07.asf";
   const std::string amc = std::string(KG_DATA_DIR) + "/cmu/asf_amc/07_05.amc";
   if (std::filesystem::exists(asf) && std::filesystem::exists(amc)) {
-    std::printf("== CMU 07_05 (slow walk) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor plants, floor, "
-                "joint limits; the library's initial estimate ==\n");
+    std::printf(
+        "== CMU 07_05 (slow walk) at 30 Hz to 60%% (thighs and shanks 51%%): detected floor plants, floor, "
+        "joint limits; the library's initial estimate ==\n");
     io::ImportedMotion in = io::import_motion(amc, asf, {});
     const motion::Motion src = motion::resample(in.motion, 30.0);
     run(cmu_case(src, "07_05 60%, short legs"), table, 5);

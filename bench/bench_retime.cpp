@@ -75,10 +75,10 @@
 #include "../tests/support/kdl_body.hpp"
 #endif
 
+#include "kg/body/body_build.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"
@@ -546,7 +546,7 @@ class NaiveObjective final : public retime::PathObjective {
                              .point = hull.points.col(j),
                              .force = hull.force_directions.col(j) * lambda_[j]});
     body::inverse_dynamics(c_.limited, c_.clip.values.row(f), qd_, qdd_, c_.hulls.gravity, external_, ws_,
-                             tau_);
+                           tau_);
     double value = w_ * (tau_ - c_.targets[static_cast<std::size_t>(f)]).squaredNorm();
     if (hull.status == retime::HullStatus::Flight && !roots_.empty()) {
       const FlightConstants& k = flight_[static_cast<std::size_t>(f)];
@@ -951,7 +951,7 @@ int main(int argc, char** argv) {
                     Eigen::VectorXd tau(c.clip.skeleton->channel_count());
                     return seconds_per_frame(c.clip.frame_count(), [&](int f) {
                       body::inverse_dynamics(c.body, c.clip.values.row(f), c.d.first.row(f),
-                                               c.d.second.row(f), g, {}, ws, tau);
+                                             c.d.second.row(f), g, {}, ws, tau);
                       g_sink = tau[0];
                     });
                   }});
@@ -1097,7 +1097,7 @@ int main(int argc, char** argv) {
     std::printf("\n%-14s", "fewest/frame");
     for (const auto& c : cases)
       std::printf("%10.2f", static_cast<double>(retime::sample_grid(c->solution.warp, c->clip.fps,
-                                                                     retime::RetimeOptions{}.samples_per_frame)
+                                                                    retime::RetimeOptions{}.samples_per_frame)
                                                     .samples()) /
                                 c->clip.frame_count());
     std::printf("\nper evaluation (ns):\n");
@@ -1145,7 +1145,7 @@ int main(int argc, char** argv) {
       double worst = 0;
       for (int f = 0; f < c->clip.frame_count(); ++f) {
         body::inverse_dynamics(c->body, c->clip.values.row(f), c->d.first.row(f), c->d.second.row(f), g, {},
-                                 ws, tau);
+                               ws, tau);
         c->kdl(f, ktau);
         double diff = 0, scale = 0;
         for (std::size_t i = 0; i < order.size(); ++i) {

@@ -184,7 +184,9 @@ void write_file_atomically(const fs::path& target, const std::function<void(std:
   files.paths.push_back(target);
 }
 
-void remove_written_files() noexcept { unlink_tracked(written_slots); }
+void remove_written_files() noexcept {
+  unlink_tracked(written_slots);
+}
 
 std::vector<fs::path> input_files_read() {
   InputFiles& files = input_files();
@@ -192,7 +194,9 @@ std::vector<fs::path> input_files_read() {
   return {files.paths.begin(), files.paths.end()};
 }
 
-void remove_pending_temporaries() noexcept { unlink_tracked(pending_slots); }
+void remove_pending_temporaries() noexcept {
+  unlink_tracked(pending_slots);
+}
 
 std::vector<fs::path> written_files() {
   WrittenFiles& files = written();

@@ -25,10 +25,13 @@ SourceLocation YamlReader::at(const YAML::Node& node) const {
   return {path_, m.line + 1, m.column + 1};
 }
 
-void YamlReader::fail(const std::string& message, const YAML::Node& where) const { throw Error(message, at(where)); }
+void YamlReader::fail(const std::string& message, const YAML::Node& where) const {
+  throw Error(message, at(where));
+}
 
 void YamlReader::fail(const std::string& message, const YAML::Mark& m) const {
-  throw Error(message, m.line < 0 ? SourceLocation{path_, 0, 0} : SourceLocation{path_, m.line + 1, m.column + 1});
+  throw Error(message,
+              m.line < 0 ? SourceLocation{path_, 0, 0} : SourceLocation{path_, m.line + 1, m.column + 1});
 }
 
 YAML::Node YamlReader::load(std::string_view text, const std::string& empty_message) const {
@@ -52,8 +55,8 @@ std::vector<YamlReader::Entry> YamlReader::entries(const YAML::Node& map, const 
     Entry e{it->first.Scalar(), it->first, it->second};
     for (const Entry& prior : out)
       if (prior.key == e.key)
-        fail("duplicate key " + text::in_quotes(e.key) + " in " + what + " (first at " + at(prior.key_node).to_string() +
-                 ")",
+        fail("duplicate key " + text::in_quotes(e.key) + " in " + what + " (first at " +
+                 at(prior.key_node).to_string() + ")",
              e.key_node);
     out.push_back(std::move(e));
   }
@@ -66,7 +69,8 @@ void YamlReader::check_keys(const std::vector<Entry>& es, const std::string& wha
     if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
     const std::string near = nearest_name(e.key, allowed);
     fail("unknown key " + text::in_quotes(e.key) + " in " + what +
-             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; allowed: " + text::join(allowed),
+             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") +
+             "; allowed: " + text::join(allowed),
          e.key_node);
   }
 }
@@ -78,7 +82,8 @@ void YamlReader::check_keys(const YAML::Node& map, const std::string& path,
     if (std::find(allowed.begin(), allowed.end(), key) != allowed.end()) continue;
     const std::string near = nearest_name(key, allowed);
     fail("unknown key " + text::in_quotes(path.empty() ? key : path + "." + key) +
-             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; allowed: " + text::join(allowed),
+             (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") +
+             "; allowed: " + text::join(allowed),
          it->first.Mark());
   }
 }
@@ -113,7 +118,8 @@ double YamlReader::number(const YAML::Node& n, const std::string& what, bool all
   double v = 0;
   std::istringstream in(text);
   in >> v;
-  if (in.fail() || !(in >> std::ws).eof()) fail(what + ": expected a number, got " + text::in_quotes(text), n);
+  if (in.fail() || !(in >> std::ws).eof())
+    fail(what + ": expected a number, got " + text::in_quotes(text), n);
   if (!std::isfinite(v)) fail(what + ": expected a finite number, got " + text::in_quotes(text), n);
   return v;
 }

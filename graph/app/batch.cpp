@@ -303,7 +303,8 @@ bool write_all(int fd, const std::string& text) {
     const graph::Graph g = load_graph(host, b.graph, sets);
     graph::RunOptions options;
     options.reproducible = true;
-    options.keep_outputs = false;  // the sinks have written the files: free each value after its last consumer
+    options.keep_outputs =
+        false;  // the sinks have written the files: free each value after its last consumer
     options.on_log = [](const std::string& node, const std::string& message) {
       std::cerr << node << ": " << message << '\n';
     };

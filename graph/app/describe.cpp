@@ -11,9 +11,9 @@
 namespace kg::app {
 namespace {
 
-using kg::JsonWriter;
 using graph::ParamSpec;
 using graph::PortSpec;
+using kg::JsonWriter;
 
 // Words of `text` on lines of at most `width` characters, each starting with `indent`.
 void write_wrapped(std::ostream& os, const std::string& text, const std::string& indent,

@@ -128,9 +128,11 @@ std::string node_key(const NodeInstance& node, const NodeType* type, const std::
                      const std::vector<std::string>& keys) {
   std::string text = "kg.node-key 1\ntype " + node.type + "\nversion " +
                      (type ? std::to_string(type->spec.version) : std::string("?")) + "\n";
-  for (const auto& [name, value] : node.params.all()) text += "param " + name + " = " + to_string(value) + "\n";
+  for (const auto& [name, value] : node.params.all())
+    text += "param " + name + " = " + to_string(value) + "\n";
   std::vector<std::string> wired;
-  for (const Input& in : inputs) wired.push_back("input " + in.port + " <- " + keys[in.from] + "." + in.from_port + "\n");
+  for (const Input& in : inputs)
+    wired.push_back("input " + in.port + " <- " + keys[in.from] + "." + in.from_port + "\n");
   std::sort(wired.begin(), wired.end());
   for (const std::string& line : wired) text += line;
   return sha256_hex(text);
@@ -336,7 +338,8 @@ RunResult run_graph(const Graph& graph, const Registry& registry, const RunOptio
         if (const NodeType* type = registry.find_node(graph.nodes[first].type))
           for (const PortSpec& out : type->spec.outputs) consumed(first, out.name);
         lock.unlock();
-        log(run.id, "same_as: " + same.id + " (the same type, params and inputs: its results, not run again)");
+        log(run.id,
+            "same_as: " + same.id + " (the same type, params and inputs: its results, not run again)");
         if (run.status == NodeStatus::Failed) log(run.id, "failed: " + run.message);
         lock.lock();
       } else {

@@ -104,7 +104,8 @@ class Loader {
     if (map.IsNull()) return out;
     if (!map.IsMap()) fail(text::in_quotes(path) + " must be a map, got " + kind_of(map), at(map));
     for (auto it = map.begin(); it != map.end(); ++it) {
-      if (!it->first.IsScalar()) fail("a key of " + text::in_quotes(path) + " must be a plain name", at(it->first));
+      if (!it->first.IsScalar())
+        fail("a key of " + text::in_quotes(path) + " must be a plain name", at(it->first));
       Entry e{it->first.Scalar(), it->first, it->second};
       for (const Entry& prior : out)
         if (prior.key == e.key) {
@@ -224,7 +225,8 @@ class Variables {
       }
       const std::size_t close = text.find('}', i + 2);
       if (close == std::string::npos)
-        loader_.fail("unterminated '${' in " + text::in_quotes(text) + " (write $$ for a literal dollar)", where);
+        loader_.fail("unterminated '${' in " + text::in_quotes(text) + " (write $$ for a literal dollar)",
+                     where);
       const std::string name = text.substr(i + 2, close - i - 2);
       if (!is_identifier(name, false))
         loader_.fail("bad variable reference '${" + name + "}' in " + text::in_quotes(text) +
@@ -248,7 +250,8 @@ class Variables {
     if (std::find(resolving_.begin(), resolving_.end(), name) != resolving_.end()) {
       std::vector<std::string> chain(std::find(resolving_.begin(), resolving_.end(), name), resolving_.end());
       chain.push_back(name);
-      loader_.fail("variable defaults refer to each other in a cycle: " + text::join(chain, " -> "), v->where);
+      loader_.fail("variable defaults refer to each other in a cycle: " + text::join(chain, " -> "),
+                   v->where);
     }
     resolving_.push_back(name);
     std::string value =
@@ -323,17 +326,20 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
       Variable var;
       var.name = e.key;
       var.where = L.at(e.key_node);
-      if (const Entry* d = Loader::find(fields, "doc")) var.doc = L.scalar(*d, text::in_quotes(path + ".doc"));
+      if (const Entry* d = Loader::find(fields, "doc"))
+        var.doc = L.scalar(*d, text::in_quotes(path + ".doc"));
       if (const Entry* r = Loader::find(fields, "required")) {
         const std::string t = L.scalar(*r, text::in_quotes(path + ".required"), false);
         const auto b = parse_bool(t);
         if (!b)
-          L.fail(text::in_quotes(path + ".required") + " must be true or false, got " + text::in_quotes(t), L.at(*r));
+          L.fail(text::in_quotes(path + ".required") + " must be true or false, got " + text::in_quotes(t),
+                 L.at(*r));
         var.required = *b;
       }
       if (const Entry* d = Loader::find(fields, "default")) {
         if (var.required)
-          L.fail("variable " + text::in_quotes(e.key) + " is required, so it takes no default (drop one of them)",
+          L.fail("variable " + text::in_quotes(e.key) +
+                     " is required, so it takes no default (drop one of them)",
                  L.at(d->key_node));
         if (!d->value.IsNull() && !d->value.IsScalar())
           L.fail(text::in_quotes(path + ".default") +
@@ -467,7 +473,8 @@ class ParamReader {
  private:
   // The text after substitution, and what it was written as when a variable supplied it.
   static std::string shown(const std::string& text, const std::string& raw) {
-    return text == raw ? text::in_quotes(text) : text::in_quotes(text) + " (from " + text::in_quotes(raw) + ")";
+    return text == raw ? text::in_quotes(text)
+                       : text::in_quotes(text) + " (from " + text::in_quotes(raw) + ")";
   }
 
   // "0,-9.81,0", "[0, -9.81, 0]", "0 -9.81 0" or one number, typically from a variable.
@@ -500,8 +507,8 @@ class ParamReader {
     for (std::size_t i = 0; i < items.size(); ++i) {
       const auto x = text::parse_double(items[i]);
       if (!x)
-        L_.fail(who + " expects a list of numbers; element " + std::to_string(i) + " " + text::in_quotes(items[i]) +
-                    " of " + shown(text, raw) + " is not a number",
+        L_.fail(who + " expects a list of numbers; element " + std::to_string(i) + " " +
+                    text::in_quotes(items[i]) + " of " + shown(text, raw) + " is not a number",
                 where);
       list.push_back(*x);
     }
@@ -510,8 +517,7 @@ class ParamReader {
 
   void check_range(const ParamSpec& p, double x, const std::string& who, const SourceLocation& where) const {
     auto show = [&](double v) {
-      return p.type == ParamType::Int ? std::to_string(static_cast<std::int64_t>(v))
-                                      : text::format_double(v);
+      return p.type == ParamType::Int ? std::to_string(static_cast<std::int64_t>(v)) : text::format_double(v);
     };
     if (p.min && x < *p.min)
       L_.fail(who + " is " + show(x) + ", below its minimum " + show(*p.min) + range_text(p, show), where);
@@ -583,13 +589,14 @@ void check_paths(const Loader& L, const Graph& g, const Registry& registry, cons
   for (std::size_t o = 0; o < outputs.size(); ++o) {
     for (const PathUse& in : inputs)
       if (outputs[o].canonical == in.canonical)
-        L.fail(name(outputs[o]) + " would overwrite input " + text::in_quotes(in.text) + " (read by " + name(in) +
-                   " at " + place(in).to_string() + "): " + text::in_quotes(outputs[o].text) + " is the same file",
+        L.fail(name(outputs[o]) + " would overwrite input " + text::in_quotes(in.text) + " (read by " +
+                   name(in) + " at " + place(in).to_string() + "): " + text::in_quotes(outputs[o].text) +
+                   " is the same file",
                place(outputs[o]));
     for (std::size_t p = 0; p < o; ++p)
       if (outputs[o].canonical == outputs[p].canonical)
-        L.fail(name(outputs[o]) + " writes " + text::in_quotes(outputs[o].text) + ", which " + name(outputs[p]) +
-                   " (" + place(outputs[p]).to_string() + ") writes too",
+        L.fail(name(outputs[o]) + " writes " + text::in_quotes(outputs[o].text) + ", which " +
+                   name(outputs[p]) + " (" + place(outputs[p]).to_string() + ") writes too",
                place(outputs[o]));
   }
 }
@@ -649,9 +656,9 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     if (!is_identifier(e.key, true))
       L.fail("node id " + text::in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);
     if (!e.value.IsMap())
-      L.fail(
-          text::in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " + kind_of(e.value),
-          L.at(e));
+      L.fail(text::in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " +
+                 kind_of(e.value),
+             L.at(e));
     const auto fields = L.entries(e.value, path);
     L.check_keys(fields, path, kNodeKeys);
     if (const Entry* doc = Loader::find(fields, "doc")) L.scalar(*doc, text::in_quotes(path + ".doc"));
@@ -662,7 +669,8 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     const NodeType* node_type = registry.find_node(type);
     if (!node_type) {
       const auto names = registry.node_type_names();
-      std::string message = "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
+      std::string message =
+          "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
       const std::string near = nearest_name(type, names);
       if (!near.empty())
         message += "; did you mean '" + near + "'?";
@@ -686,8 +694,8 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
         if (!p) {
           std::vector<std::string> names;
           for (const ParamSpec& q : spec.params) names.push_back(q.name);
-          L.fail("unknown param " + text::in_quotes(pe.key) + " for node " + text::in_quotes(node.id) + " (" + type +
-                     ")" + did_you_mean(pe.key, names) +
+          L.fail("unknown param " + text::in_quotes(pe.key) + " for node " + text::in_quotes(node.id) + " (" +
+                     type + ")" + did_you_mean(pe.key, names) +
                      (names.empty() ? " (it takes no params)" : " (params: " + text::join(names) + ")"),
                  L.at(pe.key_node));
         }
@@ -698,8 +706,8 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     for (const ParamSpec& p : spec.params) {
       if (node.params.has(p.name)) continue;
       if (p.required)
-        L.fail("node " + text::in_quotes(node.id) + " (" + type + ") needs param " + text::in_quotes(p.name) + " (" +
-                   to_string(p.type) + (p.doc.empty() ? std::string() : ": " + p.doc) + ")",
+        L.fail("node " + text::in_quotes(node.id) + " (" + type + ") needs param " + text::in_quotes(p.name) +
+                   " (" + to_string(p.type) + (p.doc.empty() ? std::string() : ": " + p.doc) + ")",
                where);
       node.params.set(p.name, p.default_value);
     }
@@ -723,8 +731,9 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
       const std::string path = "connections[" + std::to_string(k++) + "]";
       const SourceLocation where = L.at(item);
       if (!item.IsMap())
-        L.fail(text::in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
-               where);
+        L.fail(
+            text::in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
+            where);
       const auto fields = L.entries(item, path);
       L.check_keys(fields, path, kConnectionKeys);
       Connection c;
@@ -736,7 +745,8 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
         const SourceLocation at = L.at(*f);
         const std::size_t dot = text.find('.');
         if (dot == std::string::npos || dot == 0 || dot + 1 == text.size())
-          L.fail(text::in_quotes(path + "." + end) + " must be 'node.port', got " + text::in_quotes(text), at);
+          L.fail(text::in_quotes(path + "." + end) + " must be 'node.port', got " + text::in_quotes(text),
+                 at);
         PortRef ref{text.substr(0, dot), text.substr(dot + 1)};
         auto found = index.find(ref.node);
         if (found == index.end())

@@ -23,7 +23,8 @@ std::regex compile(const std::string& pattern, const kg::SourceLocation& where, 
   try {
     return std::regex(pattern, std::regex::ECMAScript);
   } catch (const std::regex_error& e) {
-    throw Error("bad regular expression " + text::in_quotes(pattern) + " in " + what + ": " + e.what(), where);
+    throw Error("bad regular expression " + text::in_quotes(pattern) + " in " + what + ": " + e.what(),
+                where);
   }
 }
 
@@ -110,13 +111,15 @@ void check_segment_inertia(const Eigen::Matrix3d& I, const std::string& what) {
   const Eigen::Vector3d ev =
       Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(I, Eigen::EigenvaluesOnly).eigenvalues();
   if (!(ev.minCoeff() > 0))
-    throw std::invalid_argument(what + ": inertia is not positive definite (principal moments " + text::significant(ev[0], 4) +
-                                ", " + text::significant(ev[1], 4) + ", " + text::significant(ev[2], 4) + " kg m²)");
+    throw std::invalid_argument(what + ": inertia is not positive definite (principal moments " +
+                                text::significant(ev[0], 4) + ", " + text::significant(ev[1], 4) + ", " +
+                                text::significant(ev[2], 4) + " kg m²)");
   // A rigid body's principal moments obey the triangle inequality (each is a sum of two second
   // moments of its mass distribution).
   if (ev[2] > (ev[0] + ev[1]) * (1 + 1e-9))
-    throw std::invalid_argument(what + ": no rigid body has these principal moments (" + text::significant(ev[0], 4) + ", " +
-                                text::significant(ev[1], 4) + ", " + text::significant(ev[2], 4) +
+    throw std::invalid_argument(what + ": no rigid body has these principal moments (" +
+                                text::significant(ev[0], 4) + ", " + text::significant(ev[1], 4) + ", " +
+                                text::significant(ev[2], 4) +
                                 " kg m²: the largest exceeds the sum of the others)");
 }
 
@@ -125,7 +128,8 @@ namespace {
 void check_spec(const BodySpec& spec) {
   const std::string table = to_string(spec.table);
   if (!std::isfinite(spec.mass) || spec.mass < 0)
-    throw std::invalid_argument("body mass " + text::significant(spec.mass, 4) + ": expected a finite number of kg");
+    throw std::invalid_argument("body mass " + text::significant(spec.mass, 4) +
+                                ": expected a finite number of kg");
   if (spec.table != BodyTable::Cylinders && !(spec.mass > 0))
     throw std::invalid_argument("body mass " + text::significant(spec.mass, 4) + " kg with table " + table +
                                 ": expected > 0 (0 means 'from the volumes' only with cylinders)");
@@ -137,13 +141,15 @@ void check_spec(const BodySpec& spec) {
                                   ": expected metres > 0");
   }
   if (!std::isfinite(spec.friction) || spec.friction < 0)
-    throw std::invalid_argument("friction " + text::significant(spec.friction, 4) + ": expected a finite number >= 0");
+    throw std::invalid_argument("friction " + text::significant(spec.friction, 4) +
+                                ": expected a finite number >= 0");
   if (!spec.gravity.allFinite()) throw std::invalid_argument("gravity: expected a finite vector (m/s²)");
   for (const SegmentOverride& o : spec.segments) {
     const std::string what = "segments " + text::in_quotes(o.pattern);
     auto positive = [&](const std::optional<double>& v, const char* name) {
       if (v && (!std::isfinite(*v) || !(*v > 0)))
-        throw Error(what + "." + name + " " + text::significant(*v, 4) + ": expected a finite number > 0", o.where);
+        throw Error(what + "." + name + " " + text::significant(*v, 4) + ": expected a finite number > 0",
+                    o.where);
     };
     positive(o.mass, "mass");
     positive(o.mass_scale, "mass_scale");
@@ -319,8 +325,9 @@ ClassNames match_classes(const Skeleton& s, const BodySpec& spec, BuiltBody& out
     for (int j : user.matched[p])
       if (user.owner[J(j)] == static_cast<int>(p)) matched.push_back(s.joint(j).name);
     out.notes.push_back(
-        "classes " + text::in_quotes(spec.classes[p].pattern) + " -> " + to_string(spec.classes[p].segment_class) +
-        ": " + (matched.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(matched)));
+        "classes " + text::in_quotes(spec.classes[p].pattern) + " -> " +
+        to_string(spec.classes[p].segment_class) + ": " +
+        (matched.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(matched)));
   }
   return names;
 }
@@ -385,8 +392,8 @@ void require_table_segments(const Skeleton& s, const Groups& groups, const Class
       missing.push_back(name + " (no joint matched" +
                         (is_paired(sc) ? "; expected a left and a right)" : ")"));
     else if (runs.size() != want)
-      missing.push_back(name + " (" + std::to_string(runs.size()) +
-                        " separate runs of joints: " + text::join(runs, ", ") + "; expected a left and a right)");
+      missing.push_back(name + " (" + std::to_string(runs.size()) + " separate runs of joints: " +
+                        text::join(runs, ", ") + "; expected a left and a right)");
     else if (zero)
       missing.push_back(name + " (" + text::join(runs, ", ") +
                         ": no bone, every joint's children and End Sites are at its origin)");
@@ -533,12 +540,14 @@ void rescale_to_body_mass(const BodySpec& spec, const std::vector<std::string>& 
       seg.mass *= k;
       seg.inertia *= k;
     }
-    out.notes.push_back("body: " + source + ", " + text::significant(spec.mass, 4) + " kg" +
-                        (cylinders ? " (volumes " + text::significant(sum, 4) + " kg, rescaled by " + text::significant(k, 4) + ")"
-                                   : (std::abs(k - 1) > 1e-12 ? " (the table's fractions sum to " +
-                                                                    text::significant(100 * table->mass_sum(), 6) +
-                                                                    "%: rescaled by " + text::significant(k, 6) + ")"
-                                                              : std::string())));
+    out.notes.push_back(
+        "body: " + source + ", " + text::significant(spec.mass, 4) + " kg" +
+        (cylinders
+             ? " (volumes " + text::significant(sum, 4) + " kg, rescaled by " + text::significant(k, 4) + ")"
+             : (std::abs(k - 1) > 1e-12
+                    ? " (the table's fractions sum to " + text::significant(100 * table->mass_sum(), 6) +
+                          "%: rescaled by " + text::significant(k, 6) + ")"
+                    : std::string())));
   }
   if (!zero_length.empty())
     out.notes.push_back("no bone, so no mass (children and End Sites at the joint's origin): " +
@@ -598,7 +607,8 @@ void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
       }
       const double before = seg.mass;
       override_segment(o, what, out.bones[J(j)], seg);
-      done.push_back(name + " " + text::significant(before, 4) + " -> " + text::significant(seg.mass, 4) + " kg");
+      done.push_back(name + " " + text::significant(before, 4) + " -> " + text::significant(seg.mass, 4) +
+                     " kg");
     }
     out.notes.push_back(
         "segments " + text::in_quotes(o.pattern) + ": " +
@@ -680,7 +690,8 @@ void apply_torque_limits(const Skeleton& s, const BodySpec& spec, const std::vec
                   t.where);
     out.notes.push_back(
         "torque_limits " + text::in_quotes(t.pattern) + " = " +
-        (t.values.size() == 1 ? text::significant(t.values[0], 4) + " N m" : std::to_string(t.values.size()) + " values") +
+        (t.values.size() == 1 ? text::significant(t.values[0], 4) + " N m"
+                              : std::to_string(t.values.size()) + " values") +
         ": " + (done.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(done)));
   }
 }
@@ -755,7 +766,8 @@ void check_body_model(const BodyModel& body, const std::string& who) {
     if (std::isnan(body.torque_min[c]) || std::isnan(body.torque_max[c]) ||
         body.torque_min[c] > body.torque_max[c])
       throw std::invalid_argument(who + ": channel " + s.channel_name(static_cast<int>(c)) + " bounds [" +
-                                  text::significant(body.torque_min[c], 4) + ", " + text::significant(body.torque_max[c], 4) + "]");
+                                  text::significant(body.torque_min[c], 4) + ", " +
+                                  text::significant(body.torque_max[c], 4) + "]");
   if (!std::isfinite(body.friction) || body.friction < 0)
     throw std::invalid_argument(who + ": friction " + text::significant(body.friction, 4));
   if (!body.gravity.allFinite()) throw std::invalid_argument(who + ": gravity is not finite");

@@ -9,9 +9,9 @@
 
 #include "kg/base/atomic_file.hpp"
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/base/yaml_reader.hpp"
 #include "kg/body/body_build.hpp"
-#include "kg/base/text.hpp"
 
 namespace kg::body {
 
@@ -23,7 +23,6 @@ using kg::SourceLocation;
 class Reader : public kg::YamlReader {
  public:
   explicit Reader(std::string path) : YamlReader(std::move(path)) {}
-
 
   std::vector<double> numbers(const YAML::Node& n, const std::string& what, bool allow_inf = false) const {
     if (!n.IsSequence()) fail(what + ": expected a list of numbers", n);
@@ -41,7 +40,8 @@ class Reader : public kg::YamlReader {
     try {
       std::regex re(e.key, std::regex::ECMAScript);
     } catch (const std::regex_error& err) {
-      fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+      fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(),
+           e.key_node);
     }
   }
 
@@ -153,8 +153,8 @@ class Reader : public kg::YamlReader {
         const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
         const std::string near = kg::nearest_name(got, segment_class_names());
         fail("classes." + c.key + ": unknown class " + text::in_quotes(got) +
-                 (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") + "; expected one of " +
-                 text::join(segment_class_names()),
+                 (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") +
+                 "; expected one of " + text::join(segment_class_names()),
              c.value);
       }
       out.push_back({c.key, *segment_class_from_string(c.value.Scalar()), at(c.key_node)});
@@ -197,7 +197,8 @@ class Reader : public kg::YamlReader {
       if (limit.values.empty()) fail(what + ": expected one bound per channel, got an empty list", t.value);
       for (std::size_t i = 0; i < limit.values.size(); ++i)
         if (!(limit.values[i] > 0))
-          fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " + text::significant(limit.values[i]),
+          fail(what + "[" + std::to_string(i) + "]: expected N m > 0 (or .inf), got " +
+                   text::significant(limit.values[i]),
                t.value[i]);
     } else {
       const double v = number(t.value, what, true);
@@ -218,7 +219,8 @@ class Reader : public kg::YamlReader {
     if (!n.IsScalar()) fail("gravity: expected m/s² (straight down) or a vector [x, y, z]", n);
     const double g = number(n, "gravity");
     if (g < 0)
-      fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " + text::significant(g),
+      fail("gravity: expected a magnitude >= 0 (m/s², straight down) or a vector [x, y, z], got " +
+               text::significant(g),
            n);
     return Eigen::Vector3d(0, -g, 0);
   }
@@ -226,7 +228,8 @@ class Reader : public kg::YamlReader {
   // A table needs a mass > 0, located at the file's `mass` when it gave one.
   void check_mass(const BodySpec& spec, const Entry* mass) const {
     if (spec.table == BodyTable::Cylinders || spec.mass > 0) return;
-    const std::string msg = "mass " + text::significant(spec.mass) + " kg with table " + to_string(spec.table) +
+    const std::string msg = "mass " + text::significant(spec.mass) + " kg with table " +
+                            to_string(spec.table) +
                             ": expected > 0 (0 means 'from the volumes' only with cylinders)";
     if (mass != nullptr) fail(msg, mass->value);
     throw Error(msg, {path(), 1, 1});

@@ -3,11 +3,11 @@
 #include <limits>
 #include <memory>
 
-#include "kg/builtin_nodes.hpp"
-#include "kg/body/nodes.hpp"
-#include "kg/motion/motion.hpp"
-#include "kg/body/body_build.hpp"
 #include "kg/base/text.hpp"
+#include "kg/body/body_build.hpp"
+#include "kg/body/nodes.hpp"
+#include "kg/builtin_nodes.hpp"
+#include "kg/motion/motion.hpp"
 
 namespace kg {
 namespace {
@@ -23,7 +23,8 @@ std::string describe(const std::string& key, const body::BodySpec& s) {
   if (key == "mass") return text::significant(s.mass, 4) + " kg";
   if (key == "friction") return text::significant(s.friction, 4);
   const Eigen::Vector3d& g = s.gravity;
-  return "[" + text::significant(g.x(), 4) + ", " + text::significant(g.y(), 4) + ", " + text::significant(g.z(), 4) + "] m/s²";
+  return "[" + text::significant(g.x(), 4) + ", " + text::significant(g.y(), 4) + ", " +
+         text::significant(g.z(), 4) + "] m/s²";
 }
 
 class BodyModelNode final : public graph::Node {
@@ -65,7 +66,8 @@ class BodyModelNode final : public graph::Node {
     for (int c = 0; c < body::kSegmentClassCount; ++c) {
       const auto sc = static_cast<body::SegmentClass>(c);
       const double kg = built.class_mass[static_cast<std::size_t>(c)];
-      summary += std::string(c ? "," : "") + " " + body::to_string(sc) + " " + text::significant(kg, 4) + " kg";
+      summary +=
+          std::string(c ? "," : "") + " " + body::to_string(sc) + " " + text::significant(kg, 4) + " kg";
       ctx.report(std::string("mass_") + body::to_string(sc), kg);
     }
     ctx.log(summary);

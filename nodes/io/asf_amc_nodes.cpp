@@ -5,8 +5,8 @@
 #include <vector>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/io/nodes.hpp"
 #include "kg/io/asf_amc.hpp"
+#include "kg/io/nodes.hpp"
 
 namespace kg {
 

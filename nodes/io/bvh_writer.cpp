@@ -7,8 +7,8 @@
 #include <numbers>
 #include <stdexcept>
 
-#include "kg/io/bvh.hpp"
 #include "kg/base/option_check.hpp"
+#include "kg/io/bvh.hpp"
 #include "kg/motion/rotations.hpp"
 
 namespace kg::io {
@@ -241,7 +241,8 @@ void BvhWriteOptions::validate() const {
   using options::require;
   const char* o = "BvhWriteOptions";
   require(units == "source" || known_unit(units), o, "units", units, "source, m, cm, mm, inch or asf");
-  require(precision >= 1 && precision <= 12, o, "precision", precision, "1 to 12 digits after the decimal point");
+  require(precision >= 1 && precision <= 12, o, "precision", precision,
+          "1 to 12 digits after the decimal point");
 }
 
 std::string write_bvh_string(const motion::Motion& motion, const BvhWriteOptions& options) {

@@ -125,7 +125,8 @@ void ImportOptions::validate() const {
   const char* o = "ImportOptions";
   require(units == "auto" || known_unit(units), o, "units", units, "auto, m, cm, mm, inch or asf");
   require(up == "auto" || up == "y" || up == "z", o, "up", up, "auto, y or z");
-  require(options::non_negative(fps), o, "fps", fps, ">= 0 and finite (frames per second; 0 keeps the file's)");
+  require(options::non_negative(fps), o, "fps", fps,
+          ">= 0 and finite (frames per second; 0 keeps the file's)");
 }
 
 std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOptions& options,

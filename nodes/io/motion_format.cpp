@@ -54,7 +54,8 @@ void MotionWriteOptions::validate() const {
   using options::require;
   const char* o = "MotionWriteOptions";
   require(units == "source" || known_unit(units), o, "units", units, "source, m, cm, mm, inch or asf");
-  require(precision >= 1 && precision <= 12, o, "precision", precision, "1 to 12 digits after the decimal point");
+  require(precision >= 1 && precision <= 12, o, "precision", precision,
+          "1 to 12 digits after the decimal point");
 }
 
 namespace {

@@ -38,9 +38,11 @@ graph::NodeType write_report_type() {
   graph::NodeSpec spec{
       .type = "io.write_report",
       .version = 1,
-      .doc = "Writes a report (retime.retime's, retarget.metrics') as a JSON file, atomically: pretty-printed with "
-             "two spaces, numbers in their shortest exact form, then a blank line. A report its node set before "
-             "failing (retime.retime with strict) is written all the same, saying why.",
+      .doc =
+          "Writes a report (retime.retime's, retarget.metrics') as a JSON file, atomically: pretty-printed "
+          "with "
+          "two spaces, numbers in their shortest exact form, then a blank line. A report its node set before "
+          "failing (retime.retime with strict) is written all the same, saying why.",
       .inputs = {{"report", "kg.Report", true, "the document"}},
       .params = {{.name = "path",
                   .type = graph::ParamType::OutputPath,

@@ -10,9 +10,11 @@ namespace kg::motion {
 namespace {
 
 void check_sizes(int frames, int spacing) {
-  if (frames < 1) throw std::invalid_argument("B-spline: " + std::to_string(frames) + " frames (expected >= 1)");
+  if (frames < 1)
+    throw std::invalid_argument("B-spline: " + std::to_string(frames) + " frames (expected >= 1)");
   if (spacing < 1)
-    throw std::invalid_argument("B-spline: key spacing " + std::to_string(spacing) + " frames (expected >= 1)");
+    throw std::invalid_argument("B-spline: key spacing " + std::to_string(spacing) +
+                                " frames (expected >= 1)");
 }
 
 BasisAt basis_of(int segment, double s) {

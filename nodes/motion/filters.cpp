@@ -91,7 +91,8 @@ Eigen::MatrixXd gaussian_smoothed(const Eigen::MatrixXd& curves, double sigma_fr
   std::vector<double> kernel(static_cast<std::size_t>(2 * radius + 1));
   double sum = 0;
   for (int k = -radius; k <= radius; ++k)
-    sum += kernel[static_cast<std::size_t>(k + radius)] = std::exp(-0.5 * k * k / (sigma_frames * sigma_frames));
+    sum += kernel[static_cast<std::size_t>(k + radius)] =
+        std::exp(-0.5 * k * k / (sigma_frames * sigma_frames));
   for (double& w : kernel) w /= sum;
 
   std::optional<ParabolaEnds> parabola;

@@ -45,8 +45,10 @@ int find_by_role(const Skeleton& sk, bool left, bool toe) {
   static constexpr const char* kRight[] = {"right", "r"};
   static constexpr const char* kToe[] = {"toebase", "toes", "toe", "toejoint", "ball"};
   static constexpr const char* kFoot[] = {"foot", "ankle"};
-  const std::span<const char* const> sides = left ? std::span<const char* const>(kLeft) : std::span<const char* const>(kRight);
-  const std::span<const char* const> parts = toe ? std::span<const char* const>(kToe) : std::span<const char* const>(kFoot);
+  const std::span<const char* const> sides =
+      left ? std::span<const char* const>(kLeft) : std::span<const char* const>(kRight);
+  const std::span<const char* const> parts =
+      toe ? std::span<const char* const>(kToe) : std::span<const char* const>(kFoot);
   for (int j = 0; j < sk.joint_count(); ++j)
     if (matches(normalised(sk.joint(j).name), sides, parts)) return j;
   return -1;
@@ -59,7 +61,8 @@ std::vector<PlantPoint> auto_points(const Skeleton& sk, int character, std::vect
     const int toe = find_by_role(sk, left, true);
     if (foot >= 0) out.push_back(find_point(sk, sk.joint(foot).name, character));
     if (toe >= 0)
-      out.push_back(find_point(sk, sk.joint(toe).name + (sk.joint(toe).end_sites.empty() ? "" : "/end"), character));
+      out.push_back(
+          find_point(sk, sk.joint(toe).name + (sk.joint(toe).end_sites.empty() ? "" : "/end"), character));
     else if (foot >= 0 && !sk.joint(foot).end_sites.empty())
       out.push_back(find_point(sk, sk.joint(foot).name + "/end", character));
   }
@@ -95,7 +98,8 @@ PlantPoint find_point(const Skeleton& sk, const std::string& spec, int character
     char close = 0;
     if (spec.back() != ']' || !(in >> offset.x() >> offset.y() >> offset.z() >> close) || close != ']' ||
         !offset.allFinite())
-      throw std::invalid_argument(who + ": point '" + spec + "': expected Joint[x y z] (metres, in the joint's frame)");
+      throw std::invalid_argument(who + ": point '" + spec +
+                                  "': expected Joint[x y z] (metres, in the joint's frame)");
     joint = spec.substr(0, open);
     has_offset = true;
   }
@@ -133,23 +137,28 @@ std::vector<Eigen::Vector3d> point_positions(const Motion& m, const std::vector<
 }
 
 int FootplantDetection::count(int point) const {
-  return static_cast<int>(std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
+  return static_cast<int>(
+      std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
 }
 
 void FootplantOptions::validate() const {
   using options::require;
   const char* o = "FootplantOptions";
-  require(options::positive(height_threshold), o, "height_threshold", height_threshold, "> 0 and finite (metres)");
+  require(options::positive(height_threshold), o, "height_threshold", height_threshold,
+          "> 0 and finite (metres)");
   require(options::positive(speed_threshold), o, "speed_threshold", speed_threshold, "> 0 and finite (m/s)");
   require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis,
           ">= 1 and finite (leave thresholds = enter thresholds x hysteresis)");
-  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s, ">= 0 and finite (seconds)");
+  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s,
+          ">= 0 and finite (seconds)");
   require(min_duration_frames >= 1, o, "min_duration_frames", min_duration_frames, ">= 1");
   require(!std::isinf(floor), o, "floor", floor, "a finite height (metres), or NaN: estimated");
-  require(floor_percentile >= 0 && floor_percentile <= 0.5, o, "floor_percentile", floor_percentile, "in [0, 0.5]");
+  require(floor_percentile >= 0 && floor_percentile <= 0.5, o, "floor_percentile", floor_percentile,
+          "in [0, 0.5]");
   require(options::non_negative(trim_distance), o, "trim_distance", trim_distance,
           ">= 0 and finite (metres; 0: no trimming)");
-  require(options::non_negative(rest_window_s), o, "rest_window_s", rest_window_s, ">= 0 and finite (seconds)");
+  require(options::non_negative(rest_window_s), o, "rest_window_s", rest_window_s,
+          ">= 0 and finite (seconds)");
   require(character >= 0, o, "character", character, ">= 0");
 }
 
@@ -166,7 +175,9 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
   const int frames = m.frame_count();
   const std::size_t np = d.points.size();
   const std::vector<Eigen::Vector3d> pos = point_positions(m, d.points);
-  auto at = [&](int f, std::size_t i) -> const Eigen::Vector3d& { return pos[static_cast<std::size_t>(f) * np + i]; };
+  auto at = [&](int f, std::size_t i) -> const Eigen::Vector3d& {
+    return pos[static_cast<std::size_t>(f) * np + i];
+  };
 
   std::vector<std::vector<double>> heights(np);
   for (std::size_t i = 0; i < np; ++i) {
@@ -175,12 +186,13 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
   }
   std::vector<double> rest(np, 0.0);
   const bool rest_on_floor = o.rest_on_floor && !std::isnan(o.floor);
-  for (std::size_t i = 0; i < np; ++i) rest[i] = rest_on_floor ? o.floor : percentile(heights[i], o.floor_percentile);
+  for (std::size_t i = 0; i < np; ++i)
+    rest[i] = rest_on_floor ? o.floor : percentile(heights[i], o.floor_percentile);
   if (std::isnan(o.floor)) {
     d.floor = np == 0 || frames == 0 ? 0.0 : *std::min_element(rest.begin(), rest.end());
     std::ostringstream note;
-    note << "floor (estimated, " << o.floor_percentile * 100 << "th percentile of the lowest point): " << d.floor
-         << " m";
+    note << "floor (estimated, " << o.floor_percentile * 100
+         << "th percentile of the lowest point): " << d.floor << " m";
     d.notes.push_back(note.str());
     d.floor_estimated = true;
   } else {
@@ -195,7 +207,8 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
 
   const int k = std::max(1, static_cast<int>(std::lround(m.fps / 60.0)));
   const int half_window = static_cast<int>(std::lround(o.rest_window_s * m.fps / 2));
-  const int min_frames = std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
+  const int min_frames =
+      std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
   for (std::size_t i = 0; i < np; ++i) {
     auto speed = [&](int f) {
       const int a = std::max(0, f - k), b = std::min(frames - 1, f + k);

@@ -11,7 +11,6 @@ namespace kg::motion {
 
 namespace {
 
-
 // Parent frame from joint frame as rotation R and translation t (skeleton.hpp's formula).
 inline void local_rt(const Joint& jt, const double* values, Eigen::Matrix3d& R, Eigen::Vector3d& t) {
   t = jt.offset;

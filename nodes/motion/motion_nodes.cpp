@@ -5,8 +5,8 @@
 #include <stdexcept>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/motion/nodes.hpp"
 #include "kg/motion/motion.hpp"
+#include "kg/motion/nodes.hpp"
 #include "kg/motion/resample.hpp"
 
 namespace kg {

@@ -141,7 +141,8 @@ std::string nearest_joint_name(const Skeleton& sk, const std::string& name) {
     if (want.empty()) continue;
     const std::string n = lower(j.name);
     if (n.rfind(want, 0) == 0 && (prefix.empty() || j.name.size() < prefix.size())) prefix = j.name;
-    if (n.find(want) != std::string::npos && (contains.empty() || j.name.size() < contains.size())) contains = j.name;
+    if (n.find(want) != std::string::npos && (contains.empty() || j.name.size() < contains.size()))
+      contains = j.name;
   }
   if (!prefix.empty()) return prefix;
   if (!contains.empty()) return contains;

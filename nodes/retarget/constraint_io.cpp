@@ -15,8 +15,8 @@
 #include <yaml-cpp/yaml.h>
 
 #include "kg/base/error.hpp"
-#include "kg/base/yaml_reader.hpp"
 #include "kg/base/text.hpp"
+#include "kg/base/yaml_reader.hpp"
 
 namespace kg::retarget {
 
@@ -37,7 +37,8 @@ class Reader : public kg::YamlReader {
     if (!root["version"]) throw Error("missing 'version: 1'", {path(), 1, 1});
     const int version = integer(root["version"], "version");
     if (version != kConstraintFormatVersion)
-      fail("unsupported version " + std::to_string(version) + " (this reads version 1)", root["version"].Mark());
+      fail("unsupported version " + std::to_string(version) + " (this reads version 1)",
+           root["version"].Mark());
     if (chars_.empty()) throw Error("no character motion to resolve joint names against", {path(), 1, 1});
     ConstraintSet set;
     if (const YAML::Node cs = root["constraints"]) {
@@ -81,7 +82,9 @@ class Reader : public kg::YamlReader {
     return c;
   }
 
-  const motion::Skeleton& skeleton(int character) const { return *chars_[static_cast<std::size_t>(character)].skeleton; }
+  const motion::Skeleton& skeleton(int character) const {
+    return *chars_[static_cast<std::size_t>(character)].skeleton;
+  }
 
   int joint(const YAML::Node& n, int character) const {
     const std::string name = text(n, "joint");
@@ -96,7 +99,8 @@ class Reader : public kg::YamlReader {
   }
 
   PointRef point(const YAML::Node& n, const std::string& path, int& frame_offset) const {
-    if (!n.IsMap()) fail(path + ": expected a map {joint, offset, end_site, character, frame_offset}", n.Mark());
+    if (!n.IsMap())
+      fail(path + ": expected a map {joint, offset, end_site, character, frame_offset}", n.Mark());
     check_keys(n, path, {"joint", "offset", "end_site", "character", "frame_offset"});
     PointRef p;
     if (n["character"]) p.character = character_index(n["character"], path + ".character");
@@ -111,7 +115,9 @@ class Reader : public kg::YamlReader {
     }
     if (const YAML::Node off = n["offset"]) {
       const std::vector<double> v = numbers(off, path + ".offset");
-      if (v.size() != 3) fail(path + ".offset: expected [x, y, z] (metres), got " + std::to_string(v.size()) + " numbers", off.Mark());
+      if (v.size() != 3)
+        fail(path + ".offset: expected [x, y, z] (metres), got " + std::to_string(v.size()) + " numbers",
+             off.Mark());
       p.local = Eigen::Vector3d(v[0], v[1], v[2]);
       if (!p.local.allFinite()) fail(path + ".offset: not finite", off.Mark());
     }
@@ -126,7 +132,8 @@ class Reader : public kg::YamlReader {
     if (n.IsScalar()) {
       const std::string text = n.Scalar();
       const auto dot = text.rfind('.');
-      if (dot == std::string::npos) fail(path + ": expected 'Joint.Channel' (e.g. LeftLeg.Xrotation), got '" + text + "'", n.Mark());
+      if (dot == std::string::npos)
+        fail(path + ": expected 'Joint.Channel' (e.g. LeftLeg.Xrotation), got '" + text + "'", n.Mark());
       joint_name = text.substr(0, dot);
       channel_name = text.substr(dot + 1);
     } else if (n.IsMap()) {
@@ -157,7 +164,8 @@ class Reader : public kg::YamlReader {
         return ch;
       }
     }
-    fail("joint '" + joint_name + "' has no channel '" + channel_name + "' (it has: " + text::join(has) + ")", n.Mark());
+    fail("joint '" + joint_name + "' has no channel '" + channel_name + "' (it has: " + text::join(has) + ")",
+         n.Mark());
   }
 
   int frame_count(int character) const { return chars_[static_cast<std::size_t>(character)].frame_count(); }
@@ -177,7 +185,8 @@ class Reader : public kg::YamlReader {
         if (given) fail(path + ": give only one of frames, at_frames, times, at_times", c[k].Mark());
         given = k;
       }
-    if (!given) fail(path + ": missing frames (frames: [first, last], at_frames, times or at_times)", c.Mark());
+    if (!given)
+      fail(path + ": missing frames (frames: [first, last], at_frames, times or at_times)", c.Mark());
     const YAML::Node n = c[given];
     const std::string what = path + "." + given;
     if (!n.IsSequence()) fail(what + ": expected a list", n.Mark());
@@ -186,9 +195,12 @@ class Reader : public kg::YamlReader {
     for (const YAML::Node& x : n) frames.push_back(seconds ? time_to_frame(x, what) : integer(x, what));
     const bool range = std::string(given) == "frames" || std::string(given) == "times";
     if (range) {
-      if (frames.size() != 2) fail(what + ": expected [first, last], got " + std::to_string(frames.size()) + " entries", n.Mark());
+      if (frames.size() != 2)
+        fail(what + ": expected [first, last], got " + std::to_string(frames.size()) + " entries", n.Mark());
       if (frames[0] > frames[1])
-        fail(what + ": the range [" + std::to_string(frames[0]) + ", " + std::to_string(frames[1]) + "] is reversed", n.Mark());
+        fail(what + ": the range [" + std::to_string(frames[0]) + ", " + std::to_string(frames[1]) +
+                 "] is reversed",
+             n.Mark());
       const int a = frames[0], b = frames[1];
       frames.clear();
       for (int f = a; f <= b; ++f) frames.push_back(f);
@@ -237,12 +249,16 @@ class Reader : public kg::YamlReader {
       }
     }
     const std::vector<int> frames = base_frames(n, path);
-    const YAML::Mark frames_mark =
-        (n["frames"] ? n["frames"] : n["at_frames"] ? n["at_frames"] : n["times"] ? n["times"] : n["at_times"]).Mark();
+    const YAML::Mark frames_mark = (n["frames"]      ? n["frames"]
+                                    : n["at_frames"] ? n["at_frames"]
+                                    : n["times"]     ? n["times"]
+                                                     : n["at_times"])
+                                       .Mark();
     // same_place with one point: the point at consecutive sample frames (non-skid).
     if (c.kind == "same_place" && c.points.size() == 1 && c.channels.empty()) {
       c.points.push_back(c.points.front());
-      if (frames.size() < 2) fail(path + ": same_place with one point needs at least two frames", frames_mark);
+      if (frames.size() < 2)
+        fail(path + ": same_place with one point needs at least two frames", frames_mark);
       for (std::size_t i = 0; i + 1 < frames.size(); ++i)
         c.samples.push_back({.frames = {frames[i] + offsets[0], frames[i + 1] + offsets[0]}});
     } else {
@@ -259,7 +275,8 @@ class Reader : public kg::YamlReader {
         const int character = i < np ? c.points[i].character : c.channels[i - np].character;
         if (s.frames[i] < 0 || s.frames[i] >= frame_count(character))
           fail(path + ": frame " + std::to_string(s.frames[i]) + " is outside the clip (frames 0.." +
-                   std::to_string(frame_count(character) - 1) + (chars_.size() > 1 ? " of character " + std::to_string(character) : "") + ")",
+                   std::to_string(frame_count(character) - 1) +
+                   (chars_.size() > 1 ? " of character " + std::to_string(character) : "") + ")",
                frames_mark);
       }
     if (const ConstraintKind* kind = builtin_.find(c.kind)) {
@@ -301,10 +318,12 @@ class Reader : public kg::YamlReader {
         const std::string cname = ct->first.Scalar();
         const auto kind = motion::channel_kind_from_string(cname);
         if (!kind)
-          fail("limits." + pattern + ": unknown channel '" + cname + "' (Xposition..Zrotation)", ct->first.Mark());
+          fail("limits." + pattern + ": unknown channel '" + cname + "' (Xposition..Zrotation)",
+               ct->first.Mark());
         const std::vector<double> range = numbers(ct->second, "limits." + pattern + "." + cname);
         if (range.size() != 2 || std::isnan(range[0]) || std::isnan(range[1]) || range[0] > range[1])
-          fail("limits." + pattern + "." + cname + ": expected [min, max] with min <= max", ct->second.Mark());
+          fail("limits." + pattern + "." + cname + ": expected [min, max] with min <= max",
+               ct->second.Mark());
         const double scale = motion::is_rotation(*kind) ? std::numbers::pi / 180.0 : 1.0;
         int made = 0;
         for (int j : joints) {

@@ -8,16 +8,19 @@
 #include <stdexcept>
 
 #include "kg/base/error.hpp"
-#include "kg/motion/kinematics.hpp"
 #include "kg/base/text.hpp"
+#include "kg/motion/kinematics.hpp"
 
 namespace kg::retarget {
 
 const char* to_string(Relation relation) {
   switch (relation) {
-    case Relation::Equal: return "equal";
-    case Relation::AtLeast: return "at_least";
-    case Relation::AtMost: return "at_most";
+    case Relation::Equal:
+      return "equal";
+    case Relation::AtLeast:
+      return "at_least";
+    case Relation::AtMost:
+      return "at_most";
   }
   return "?";
 }
@@ -65,12 +68,14 @@ std::string count_text(std::size_t n, const char* noun) {
 }
 
 // What every kind checks: shapes of points/channels, samples, weight and finite numbers.
-void check_common(const Constraint& c, std::size_t points, std::size_t min_channels, std::size_t max_channels) {
+void check_common(const Constraint& c, std::size_t points, std::size_t min_channels,
+                  std::size_t max_channels) {
   if (c.points.size() != points)
     fail(c, "expects " + count_text(points, "point") + ", got " + std::to_string(c.points.size()));
   if (c.channels.size() < min_channels || c.channels.size() > max_channels) {
     if (min_channels == max_channels)
-      fail(c, "expects " + count_text(min_channels, "channel") + ", got " + std::to_string(c.channels.size()));
+      fail(c,
+           "expects " + count_text(min_channels, "channel") + ", got " + std::to_string(c.channels.size()));
     fail(c, "expects at least " + count_text(min_channels, "channel") + ", got " +
                 std::to_string(c.channels.size()));
   }
@@ -86,8 +91,8 @@ void check_common(const Constraint& c, std::size_t points, std::size_t min_chann
   if (const std::string problem = sample_locals_problem(c); !problem.empty()) fail(c, problem);
   for (const Sample& s : c.samples) {
     if (s.frames.size() != frames)
-      fail(c, "a sample has " + std::to_string(s.frames.size()) + " frames, expected " + std::to_string(frames) +
-                  " (one per point, then one per channel)");
+      fail(c, "a sample has " + std::to_string(s.frames.size()) + " frames, expected " +
+                  std::to_string(frames) + " (one per point, then one per channel)");
     for (int f : s.frames)
       if (f < 0) fail(c, "a sample has the negative frame " + std::to_string(f));
     if (!s.params.empty() && s.params.size() != c.params.size())
@@ -96,7 +101,8 @@ void check_common(const Constraint& c, std::size_t points, std::size_t min_chann
   }
 }
 
-void check_params_count(const Constraint& c, std::initializer_list<std::size_t> allowed, const char* meaning) {
+void check_params_count(const Constraint& c, std::initializer_list<std::size_t> allowed,
+                        const char* meaning) {
   for (std::size_t n : allowed)
     if (c.params.size() == n) return;
   fail(c, "expects params " + std::string(meaning) + ", got " + std::to_string(c.params.size()) + " numbers");
@@ -144,7 +150,8 @@ class ParameterRange final : public ConstraintKind {
     check_params_count(c, {1, 2}, "[min, max] or [value]");
     check_numbers(c, c.params.size() == 2, c.params.size() == 2);
     if (c.params.size() == 2) {
-      if (c.relation != Relation::Equal) fail(c, "a [min, max] range takes relation equal (its rows are inequalities)");
+      if (c.relation != Relation::Equal)
+        fail(c, "a [min, max] range takes relation equal (its rows are inequalities)");
       auto bad = [&](const std::vector<double>& p) { return p[0] > p[1]; };
       if (bad(c.params)) fail(c, "min > max");
       for (const Sample& s : c.samples)
@@ -384,9 +391,7 @@ class Orientation final : public ConstraintKind {
     else
       check_params_count(c, {4}, "[dx dy dz max_angle_rad] with relation at_most or at_least");
     check_numbers(c, false, false);
-    auto bad = [](const std::vector<double>& p) {
-      return Eigen::Vector3d(p[0], p[1], p[2]).norm() < 1e-9;
-    };
+    auto bad = [](const std::vector<double>& p) { return Eigen::Vector3d(p[0], p[1], p[2]).norm() < 1e-9; };
     if (bad(c.params)) fail(c, "the direction is zero");
     for (const Sample& s : c.samples)
       if (!s.params.empty() && bad(s.params)) fail(c, "a sample's direction is zero");
@@ -435,7 +440,8 @@ ConstraintKindTable ConstraintKindTable::builtin() {
 void ConstraintKindTable::add(std::shared_ptr<const ConstraintKind> kind) {
   if (!kind) throw std::invalid_argument("constraint kind table: null kind");
   std::string name = kind->name();
-  if (kinds_.count(name) != 0) throw std::invalid_argument("constraint kind '" + name + "' is already in the table");
+  if (kinds_.count(name) != 0)
+    throw std::invalid_argument("constraint kind '" + name + "' is already in the table");
   kinds_.emplace(std::move(name), std::move(kind));
 }
 
@@ -457,7 +463,8 @@ std::vector<std::string> ConstraintKindTable::names() const {
 
 namespace {
 [[noreturn]] void throw_unknown_kind(const Constraint& c, const std::vector<std::string>& known) {
-  std::string msg = "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + text::join(known);
+  std::string msg =
+      "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + text::join(known);
   const std::string near = kg::nearest_name(c.kind, known);
   if (!near.empty()) msg += "; did you mean '" + near + "'?";
   throw std::invalid_argument(msg + ")");
@@ -471,7 +478,8 @@ ConstraintKindTable kinds_for(const ConstraintSet& set, const ConstraintKindLook
     std::shared_ptr<const ConstraintKind> kind = lookup ? lookup(c.kind) : nullptr;
     if (!kind) throw_unknown_kind(c, table.names());
     if (kind->name() != c.kind)
-      throw std::invalid_argument("constraint kind extension '" + c.kind + "' calls itself '" + kind->name() + "'");
+      throw std::invalid_argument("constraint kind extension '" + c.kind + "' calls itself '" + kind->name() +
+                                  "'");
     table.add(std::move(kind));
   }
   return table;
@@ -491,7 +499,8 @@ PoseCache::PoseCache(std::span<const motion::Motion> motions, std::span<const Sk
   world_.resize(motions.size());
   for (std::size_t c = 0; c < motions.size(); ++c) {
     const motion::Motion& m = motions[c];
-    if (!m.skeleton) throw std::invalid_argument("pose cache: character " + std::to_string(c) + " has no skeleton");
+    if (!m.skeleton)
+      throw std::invalid_argument("pose cache: character " + std::to_string(c) + " has no skeleton");
     const int joints = m.skeleton->joint_count();
     world_[c].resize(static_cast<std::size_t>(m.frame_count()) * static_cast<std::size_t>(joints));
     const bool morphing = c < skeleton_at.size() && skeleton_at[c];
@@ -509,27 +518,33 @@ int PoseCache::frame_count(int character) const {
 
 Eigen::Vector3d PoseCache::point(const PointRef& p, int frame) const {
   if (p.character < 0 || p.character >= character_count())
-    throw std::out_of_range("character " + std::to_string(p.character) + " of " + std::to_string(character_count()));
+    throw std::out_of_range("character " + std::to_string(p.character) + " of " +
+                            std::to_string(character_count()));
   const motion::Motion& m = motions_[static_cast<std::size_t>(p.character)];
   const int joints = m.skeleton->joint_count();
   if (p.joint < 0 || p.joint >= joints)
-    throw std::out_of_range("joint " + std::to_string(p.joint) + " of character " + std::to_string(p.character) +
-                            " (it has " + std::to_string(joints) + ")");
+    throw std::out_of_range("joint " + std::to_string(p.joint) + " of character " +
+                            std::to_string(p.character) + " (it has " + std::to_string(joints) + ")");
   if (frame < 0 || frame >= m.frame_count())
-    throw std::out_of_range("frame " + std::to_string(frame) + " of character " + std::to_string(p.character) +
-                            " (it has " + std::to_string(m.frame_count()) + ")");
-  return world_[static_cast<std::size_t>(p.character)][static_cast<std::size_t>(frame) * joints + p.joint] * p.local;
+    throw std::out_of_range("frame " + std::to_string(frame) + " of character " +
+                            std::to_string(p.character) + " (it has " + std::to_string(m.frame_count()) +
+                            ")");
+  return world_[static_cast<std::size_t>(p.character)][static_cast<std::size_t>(frame) * joints + p.joint] *
+         p.local;
 }
 
 double PoseCache::value(const ChannelRef& ch, int frame) const {
   if (ch.character < 0 || ch.character >= character_count())
-    throw std::out_of_range("character " + std::to_string(ch.character) + " of " + std::to_string(character_count()));
+    throw std::out_of_range("character " + std::to_string(ch.character) + " of " +
+                            std::to_string(character_count()));
   const motion::Motion& m = motions_[static_cast<std::size_t>(ch.character)];
   if (ch.channel < 0 || ch.channel >= m.values.cols())
-    throw std::out_of_range("channel " + std::to_string(ch.channel) + " of character " + std::to_string(ch.character));
+    throw std::out_of_range("channel " + std::to_string(ch.channel) + " of character " +
+                            std::to_string(ch.character));
   if (frame < 0 || frame >= m.frame_count())
-    throw std::out_of_range("frame " + std::to_string(frame) + " of character " + std::to_string(ch.character) +
-                            " (it has " + std::to_string(m.frame_count()) + ")");
+    throw std::out_of_range("frame " + std::to_string(frame) + " of character " +
+                            std::to_string(ch.character) + " (it has " + std::to_string(m.frame_count()) +
+                            ")");
   return m.values(frame, ch.channel);
 }
 

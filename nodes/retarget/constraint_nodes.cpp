@@ -7,10 +7,10 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/footplants.hpp"
 #include "kg/retarget/holds.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/target.hpp"
 
 namespace kg {

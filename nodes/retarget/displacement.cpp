@@ -23,7 +23,8 @@ DisplacementLayout::DisplacementLayout(int frames, std::vector<int> spacing)
     if (it == distinct.end()) {
       distinct.push_back(k);
       std::vector<motion::BasisAt> table(static_cast<std::size_t>(frames));
-      for (int f = 0; f < frames; ++f) table[static_cast<std::size_t>(f)] = motion::bspline_basis(f, frames, k);
+      for (int f = 0; f < frames; ++f)
+        table[static_cast<std::size_t>(f)] = motion::bspline_basis(f, frames, k);
       basis_.push_back(std::move(table));
       it = distinct.end() - 1;
     }
@@ -41,8 +42,8 @@ const motion::BasisAt& DisplacementLayout::basis(int channel, int frame) const {
 
 motion::FrameMatrix DisplacementLayout::sample(const Eigen::Ref<const Eigen::VectorXd>& x) const {
   if (x.size() != total_)
-    throw std::invalid_argument("displacement map: " + std::to_string(x.size()) + " controls given, layout has " +
-                                std::to_string(total_));
+    throw std::invalid_argument("displacement map: " + std::to_string(x.size()) +
+                                " controls given, layout has " + std::to_string(total_));
   motion::FrameMatrix d(frames_, channel_count());
   for (int c = 0; c < channel_count(); ++c) {
     const double* xc = x.data() + offset(c);
@@ -81,7 +82,8 @@ Eigen::VectorXd DisplacementLayout::fit(const motion::FrameMatrix& values, doubl
       for (int p = 0; p < 4; ++p) {
         rhs[b.first + p] += b.weight[static_cast<std::size_t>(p)] * values(f, c);
         for (int q = 0; q < 4; ++q)
-          A(b.first + p, b.first + q) += b.weight[static_cast<std::size_t>(p)] * b.weight[static_cast<std::size_t>(q)];
+          A(b.first + p, b.first + q) +=
+              b.weight[static_cast<std::size_t>(p)] * b.weight[static_cast<std::size_t>(q)];
       }
     }
     x.segment(offset(c), n) = A.ldlt().solve(rhs);

@@ -16,8 +16,10 @@ constexpr double kInf = std::numeric_limits<double>::infinity();
 }  // namespace
 
 std::function<double(const PointRef&, int)> plant_height_scale(const Target& target, double fps) {
-  if (!(fps > 0) || !std::isfinite(fps)) throw std::invalid_argument("plant height scale: fps must be positive");
-  return [target, fps](const PointRef& point, int frame) { return height_factor(target, point, frame / fps); };
+  if (!(fps > 0) || !std::isfinite(fps))
+    throw std::invalid_argument("plant height scale: fps must be positive");
+  return
+      [target, fps](const PointRef& point, int frame) { return height_factor(target, point, frame / fps); };
 }
 
 const char* to_string(PlantFlavour flavour) {
@@ -28,7 +30,8 @@ void PlantConstraintOptions::validate() const {
   options::require(options::positive(weight), "PlantConstraintOptions", "weight", weight, "> 0 and finite");
 }
 
-ConstraintSet footplant_constraints(const motion::FootplantDetection& d, int frames, const PlantConstraintOptions& o) {
+ConstraintSet footplant_constraints(const motion::FootplantDetection& d, int frames,
+                                    const PlantConstraintOptions& o) {
   o.validate();
   auto scale_at = [&](const PointRef& point, int f) {
     if (!o.height_scale) return 1.0;
@@ -43,7 +46,8 @@ ConstraintSet footplant_constraints(const motion::FootplantDetection& d, int fra
   };
   // A constraint whose target moves over its samples gets per-sample params, else one set.
   auto set_params = [](Constraint& c, std::vector<std::vector<double>> per_sample) {
-    const bool constant = std::all_of(per_sample.begin(), per_sample.end(), [&](const auto& p) { return p == per_sample.front(); });
+    const bool constant = std::all_of(per_sample.begin(), per_sample.end(),
+                                      [&](const auto& p) { return p == per_sample.front(); });
     if (constant && !per_sample.empty()) {
       c.params = per_sample.front();
       return;
@@ -56,7 +60,8 @@ ConstraintSet footplant_constraints(const motion::FootplantDetection& d, int fra
   std::vector<int> numbers(d.points.size(), 0);
   for (const motion::Footplant& p : d.plants) {
     const motion::PlantPoint& pt = d.points[static_cast<std::size_t>(p.point)];
-    const std::string label = pt.name + " plant " + std::to_string(++numbers[static_cast<std::size_t>(p.point)]);
+    const std::string label =
+        pt.name + " plant " + std::to_string(++numbers[static_cast<std::size_t>(p.point)]);
     Constraint pos;
     pos.kind = "position";
     pos.label = label;

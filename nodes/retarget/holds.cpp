@@ -6,7 +6,6 @@
 #include <limits>
 #include <stdexcept>
 
-
 namespace kg::retarget {
 
 void HoldOptions::validate() const {
@@ -16,7 +15,8 @@ void HoldOptions::validate() const {
   require(!points_b.empty(), o, "points_b", points_b, "at least one point (of character 1)");
   require(options::positive(max_distance), o, "max_distance", max_distance, "> 0 and finite (metres)");
   require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis, ">= 1 and finite");
-  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s, ">= 0 and finite (seconds)");
+  require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s,
+          ">= 0 and finite (seconds)");
 }
 
 HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, const HoldOptions& o) {
@@ -24,14 +24,18 @@ HoldDetection detect_holds(const motion::Motion& a, const motion::Motion& b, con
   a.check();
   b.check();
   if (a.frame_count() != b.frame_count() || std::abs(a.fps - b.fps) > 1e-9 * a.fps)
-    throw std::invalid_argument("holds: the two motions differ in length or rate (" + std::to_string(a.frame_count()) +
-                                " frames at " + std::to_string(a.fps) + " Hz, " + std::to_string(b.frame_count()) +
-                                " at " + std::to_string(b.fps) + " Hz): resample them alike");
+    throw std::invalid_argument("holds: the two motions differ in length or rate (" +
+                                std::to_string(a.frame_count()) + " frames at " + std::to_string(a.fps) +
+                                " Hz, " + std::to_string(b.frame_count()) + " at " + std::to_string(b.fps) +
+                                " Hz): resample them alike");
   o.validate();
   HoldDetection d;
-  for (const std::string& spec : o.points_a) d.points_a.push_back(motion::find_point(*a.skeleton, spec, 0, "holds"));
-  for (const std::string& spec : o.points_b) d.points_b.push_back(motion::find_point(*b.skeleton, spec, 1, "holds"));
-  const std::vector<Eigen::Vector3d> pa = motion::point_positions(a, d.points_a), pb = motion::point_positions(b, d.points_b);
+  for (const std::string& spec : o.points_a)
+    d.points_a.push_back(motion::find_point(*a.skeleton, spec, 0, "holds"));
+  for (const std::string& spec : o.points_b)
+    d.points_b.push_back(motion::find_point(*b.skeleton, spec, 1, "holds"));
+  const std::vector<Eigen::Vector3d> pa = motion::point_positions(a, d.points_a),
+                                     pb = motion::point_positions(b, d.points_b);
   const int frames = a.frame_count();
   const int min_frames = std::max(1, static_cast<int>(std::ceil(o.min_duration_s * a.fps - 1e-9)));
   d.closest = std::numeric_limits<double>::infinity();
@@ -74,7 +78,8 @@ ConstraintSet hold_constraints(const HoldDetection& d, double weight) {
   for (const HoldSpan& h : d.holds) {
     const motion::PlantPoint& a = d.points_a[static_cast<std::size_t>(h.point_a)];
     const motion::PlantPoint& b = d.points_b[static_cast<std::size_t>(h.point_b)];
-    const int n = ++numbers[static_cast<std::size_t>(h.point_a) * d.points_b.size() + static_cast<std::size_t>(h.point_b)];
+    const int n = ++numbers[static_cast<std::size_t>(h.point_a) * d.points_b.size() +
+                            static_cast<std::size_t>(h.point_b)];
     Constraint c;
     c.kind = "distance";
     c.label = a.name + " ~ " + b.name + " hold " + std::to_string(n);
@@ -82,7 +87,8 @@ ConstraintSet hold_constraints(const HoldDetection& d, double weight) {
     c.params = {h.distance.front()};
     c.weight = weight;
     for (int f = h.first_frame; f <= h.last_frame; ++f)
-      c.samples.push_back({.frames = {f, f}, .params = {h.distance[static_cast<std::size_t>(f - h.first_frame)]}});
+      c.samples.push_back(
+          {.frames = {f, f}, .params = {h.distance[static_cast<std::size_t>(f - h.first_frame)]}});
     set.constraints.push_back(std::move(c));
   }
   return set;

@@ -277,8 +277,8 @@ Eigen::MatrixXd smooth_zero_phase(const Eigen::MatrixXd& x, double sigma) {
 }
 
 void InitialEstimateOptions::validate() const {
-  options::require(options::non_negative(smooth_seconds), "InitialEstimateOptions", "smooth_seconds", smooth_seconds,
-                   ">= 0 and finite (seconds; 0: no smoothing)");
+  options::require(options::non_negative(smooth_seconds), "InitialEstimateOptions", "smooth_seconds",
+                   smooth_seconds, ">= 0 and finite (seconds; 0: no smoothing)");
 }
 
 InitialEstimate initial_estimate(const motion::Motion& source, const Target& target,

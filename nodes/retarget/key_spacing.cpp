@@ -158,12 +158,14 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text) {
 void KeySpacingOptions::validate() const {
   using options::require;
   const char* o = "KeySpacingOptions";
-  require(threshold > 0 && threshold < 1, o, "threshold", threshold, "a fraction of the band energy in (0, 1)");
+  require(threshold > 0 && threshold < 1, o, "threshold", threshold,
+          "a fraction of the band energy in (0, 1)");
   require(spacing >= 0, o, "spacing", spacing, ">= 0 frames (0 = automatic)");
   try {
     parse_key_groups(groups);
   } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(std::string(o) + ".groups = " + options::value_text(groups) + ": " + e.what());
+    throw std::invalid_argument(std::string(o) + ".groups = " + options::value_text(groups) + ": " +
+                                e.what());
   }
 }
 

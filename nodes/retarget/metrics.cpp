@@ -113,7 +113,8 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
   for (const Constraint& c : set.constraints) {
     const bool position = c.kind == "position", same_place = c.kind == "same_place";
     if (!position && !same_place) continue;
-    if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; })) continue;
+    if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; }))
+      continue;
     // A target that moves on the floor is not a plant (a height that changes is: a morphing foot).
     if (position) {
       auto horizontal = [&](const Sample& s) {
@@ -289,20 +290,24 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
   const Motion& result = *in.result;
   result.check();
   if (in.constraints->character_count() > 2)
-    throw std::invalid_argument("metrics: the constraints name " + std::to_string(in.constraints->character_count()) +
+    throw std::invalid_argument("metrics: the constraints name " +
+                                std::to_string(in.constraints->character_count()) +
                                 " characters; at most two are measured");
   if (in.constraints->character_count() > 1 && !in.result2)
     for (const Constraint& c : in.constraints->constraints)
       if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character == 1; }) ||
-          std::any_of(c.channels.begin(), c.channels.end(), [](const ChannelRef& p) { return p.character == 1; }))
+          std::any_of(c.channels.begin(), c.channels.end(),
+                      [](const ChannelRef& p) { return p.character == 1; }))
         throw std::invalid_argument("metrics: constraint '" + c.label +
                                     "' names character 1; give the second character's result (motion2)");
   if (in.result2) {
     in.result2->check();
-    if (in.result2->frame_count() != result.frame_count() || std::abs(in.result2->fps - result.fps) > 1e-9 * result.fps)
-      throw std::invalid_argument("metrics: the second character has " + std::to_string(in.result2->frame_count()) +
-                                  " frames at " + std::to_string(in.result2->fps) + " Hz, the first " +
-                                  std::to_string(result.frame_count()) + " at " + std::to_string(result.fps) + " Hz");
+    if (in.result2->frame_count() != result.frame_count() ||
+        std::abs(in.result2->fps - result.fps) > 1e-9 * result.fps)
+      throw std::invalid_argument(
+          "metrics: the second character has " + std::to_string(in.result2->frame_count()) + " frames at " +
+          std::to_string(in.result2->fps) + " Hz, the first " + std::to_string(result.frame_count()) +
+          " at " + std::to_string(result.fps) + " Hz");
   }
   check_constraints(*in.constraints, *in.kinds);
 
@@ -387,7 +392,6 @@ void write_violations(kg::JsonWriter& w, const RetargetMetrics& m) {
   }
   w.end_array();
   w.end_object();
-
 }
 
 // "foot_skate_cm": the plants' travel.
@@ -411,7 +415,6 @@ void write_skate(kg::JsonWriter& w, const RetargetMetrics& m) {
   }
   w.end_array();
   w.end_object();
-
 }
 
 // "jerk": of the result, the source, their difference and the displacement.
@@ -440,7 +443,6 @@ void write_jerks(kg::JsonWriter& w, const RetargetMetrics& m) {
   else
     w.null();
   w.end_object();
-
 }
 
 // "energy_above_cutoff": the pyramid's band energy above the key spacing's cutoff, or null.

@@ -4,9 +4,9 @@
 #include <memory>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/metrics.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 
 namespace kg::retarget {
@@ -93,8 +93,10 @@ graph::NodeType metrics_node_type() {
                  {"constraints", "kg.Constraints", true, "the constraints it should meet"},
                  {"source", "kg.Motion", false, "the motion before adaptation, on its own skeleton"},
                  {"initial", "kg.Motion", false, "the initial estimate the solver started from"},
-                 {"motion2", "kg.Motion", false, "the second character's result, for constraints across characters"},
-                 {"target", "kg.Target", false, "the target character: a morphing one gives each frame its skeleton"},
+                 {"motion2", "kg.Motion", false,
+                  "the second character's result, for constraints across characters"},
+                 {"target", "kg.Target", false,
+                  "the target character: a morphing one gives each frame its skeleton"},
                  {"keys", "kg.KeySpacing", false, "the key spacing of the solve (else key_spacing)"},
                  {"solve_seconds", "kg.Scalar", false, "the solver's time, s, passed through"}},
       .outputs = {{"report", "kg.Report", true,

@@ -164,15 +164,18 @@ void check_references(const Constraint& c, const motion::Skeleton& skeleton) {
   const int n = skeleton.channel_count();
   for (const PointRef& p : c.points) {
     if (p.character != 0)
-      throw std::invalid_argument(where(c) + ": per-frame IK solves one character, the constraint names character " +
+      throw std::invalid_argument(where(c) +
+                                  ": per-frame IK solves one character, the constraint names character " +
                                   std::to_string(p.character));
     if (p.joint < 0 || p.joint >= skeleton.joint_count())
-      throw std::invalid_argument(where(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
-                                  std::to_string(skeleton.joint_count()) + " joints)");
+      throw std::invalid_argument(where(c) + ": joint " + std::to_string(p.joint) +
+                                  " out of range (skeleton has " + std::to_string(skeleton.joint_count()) +
+                                  " joints)");
   }
   for (const ChannelRef& ch : c.channels) {
     if (ch.character != 0)
-      throw std::invalid_argument(where(c) + ": per-frame IK solves one character, the constraint names character " +
+      throw std::invalid_argument(where(c) +
+                                  ": per-frame IK solves one character, the constraint names character " +
                                   std::to_string(ch.character));
     if (ch.channel < 0 || ch.channel >= n)
       throw std::invalid_argument(where(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
@@ -198,8 +201,8 @@ std::vector<std::vector<SampleRef>> samples_by_frame(const ConstraintSet& set, c
       int last = -1;
       for (int f : s.frames) {
         if (f < 0 || f >= frames)
-          throw std::invalid_argument(where(c) + ": frame " + std::to_string(f) + " out of range (motion has " +
-                                      std::to_string(frames) + " frames)");
+          throw std::invalid_argument(where(c) + ": frame " + std::to_string(f) +
+                                      " out of range (motion has " + std::to_string(frames) + " frames)");
         last = std::max(last, f);
       }
       if (last >= 0 && rows > 0) by_frame[static_cast<std::size_t>(last)].push_back({&c, kind, &s, rows});
@@ -284,7 +287,8 @@ class FrameSolver {
       ldlt_.compute(lm_);
       step_ = -ldlt_.solve(gradient_);
       step_metres = std::sqrt((step_.array().square() * m_s_.array()).sum());
-      if (worst_ <= options_.tolerance && step_metres < 1e-7) return false;  // at the minimum, constraints met
+      if (worst_ <= options_.tolerance && step_metres < 1e-7)
+        return false;  // at the minimum, constraints met
       q_trial_ = q_;
       for (Eigen::Index i = 0; i < k; ++i) q_trial_(cols_[static_cast<std::size_t>(i)]) += step_(i);
       problem.evaluate(q_trial_, rho_trial_, worst_trial_, nullptr);

@@ -3,8 +3,8 @@
 #include <memory>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 
 namespace kg::retarget {

@@ -37,7 +37,7 @@ struct Character {
   int x_offset = 0;  // of its controls in x
   int c_offset = 0;  // of its channels among all characters' channels
   int channels = 0, joints = 0;
-  std::vector<int> stamp;  // per channel: last group that touched it
+  std::vector<int> stamp;               // per channel: last group that touched it
   std::vector<std::vector<int>> chain;  // per joint: influencing channels (lazily filled)
   // Per evaluation.
   FrameMatrix values;
@@ -156,7 +156,8 @@ class Pass {
   // where the linearisation is poor), not to the objective.
   double step(const Eigen::VectorXd& x, Eigen::VectorXd& dx, double lambda) {
     assemble(x);
-    for (int i = 0; i < band_.size(); ++i) band_.at(i, i) += lambda * band_sensitivity_[static_cast<std::size_t>(i)];
+    for (int i = 0; i < band_.size(); ++i)
+      band_.at(i, i) += lambda * band_sensitivity_[static_cast<std::size_t>(i)];
     save_matrix();
     return solve_step(x, dx, lambda);
   }
@@ -199,7 +200,8 @@ class Pass {
     // Free channels no active row touches: eps M dx = -eps M x.
     for (const Character& ch : chars_)
       for (int c = 0; c < ch.channels; ++c) {
-        if (!ch.free[static_cast<std::size_t>(c)] || band_channel_[static_cast<std::size_t>(ch.c_offset + c)]) continue;
+        if (!ch.free[static_cast<std::size_t>(c)] || band_channel_[static_cast<std::size_t>(ch.c_offset + c)])
+          continue;
         const int o = ch.x_offset + ch.layout.offset(c);
         const int n = ch.layout.control_count(c);
         dx.segment(o, n) = -options_.epsilon / (options_.epsilon + lambda) * x.segment(o, n);
@@ -207,7 +209,8 @@ class Pass {
       }
     if (band_.size() > 0) {
       if (!band_.factor())
-        throw std::runtime_error("spacetime: the normal matrix is not positive definite (epsilon too small?)");
+        throw std::runtime_error(
+            "spacetime: the normal matrix is not positive definite (epsilon too small?)");
       Eigen::VectorXd y = -grad_;
       band_.solve(y);
       for (int i = 0; i < band_.size(); ++i) {
@@ -321,7 +324,8 @@ class Pass {
       const int piece = piece_of(pr.character, sample.frames[p]);
       s.point_piece.push_back(piece);
       for (int c : chain(ch, pr.joint))
-        if (ch.free[static_cast<std::size_t>(c)]) s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
+        if (ch.free[static_cast<std::size_t>(c)])
+          s.pieces[static_cast<std::size_t>(piece)].channels.push_back(c);
     }
     for (std::size_t v = 0; v < con.channels.size(); ++v) {
       const ChannelRef& cr = con.channels[v];
@@ -429,7 +433,8 @@ class Pass {
     dp.setZero();
     dv.setZero();
     kind.kind->evaluate(con, params, std::span<const Eigen::Vector3d>(points_.data(), np),
-                        std::span<const double>(values_.data(), nv), r_.segment(s.row_offset, s.rows), dp, dv);
+                        std::span<const double>(values_.data(), nv), r_.segment(s.row_offset, s.rows), dp,
+                        dv);
     if (!jacobian) return;
     bool any = false;
     for (int r = 0; r < s.rows; ++r) {
@@ -447,11 +452,13 @@ class Pass {
       if (piece.channels.empty()) continue;
       const int f = sample.frames[p];
       auto J = jac_.leftCols(ch.channels);
-      motion::point_jacobian(*ch.skeleton[static_cast<std::size_t>(f)], ch.values.row(f),
-                             std::span<const Eigen::Isometry3d>(ch.world.data() + static_cast<std::size_t>(f) * ch.joints,
-                                                                static_cast<std::size_t>(ch.joints)),
-                             pr.joint, pr.local, J);
-      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows, static_cast<Eigen::Index>(piece.channels.size()));
+      motion::point_jacobian(
+          *ch.skeleton[static_cast<std::size_t>(f)], ch.values.row(f),
+          std::span<const Eigen::Isometry3d>(ch.world.data() + static_cast<std::size_t>(f) * ch.joints,
+                                             static_cast<std::size_t>(ch.joints)),
+          pr.joint, pr.local, J);
+      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
+                                    static_cast<Eigen::Index>(piece.channels.size()));
       const std::vector<int>& chain_channels = ch.chain[static_cast<std::size_t>(pr.joint)];
       const std::vector<int>& pos = s.point_pos[p];
       for (std::size_t k = 0; k < pos.size(); ++k) {
@@ -464,7 +471,8 @@ class Pass {
     for (std::size_t v = 0; v < nv; ++v) {
       if (s.value_pos[v] < 0) continue;
       const Piece& piece = s.pieces[static_cast<std::size_t>(s.value_piece[v])];
-      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows, static_cast<Eigen::Index>(piece.channels.size()));
+      Eigen::Map<Eigen::MatrixXd> G(g_.data() + piece.g_offset, s.rows,
+                                    static_cast<Eigen::Index>(piece.channels.size()));
       G.col(s.value_pos[v]) += dv.col(static_cast<Eigen::Index>(v));
     }
   }
@@ -533,7 +541,8 @@ class Pass {
           if (gi == 0) continue;
           const motion::BasisAt& basis = ch.layout.basis(p.channels[i], p.frame);
           for (int q = 0; q < 4; ++q)
-            rows_dense_(k, local_column_[static_cast<std::size_t>(band_index(ch, p.channels[i], basis.first + q))]) +=
+            rows_dense_(
+                k, local_column_[static_cast<std::size_t>(band_index(ch, p.channels[i], basis.first + q))]) +=
                 gi * basis.weight[static_cast<std::size_t>(q)];
         }
       }
@@ -603,7 +612,8 @@ class Pass {
       const SampleInfo& s = samples_[static_cast<std::size_t>(si)];
       if (!sample_active(s)) continue;
       for (const Piece& p : s.pieces)
-        for (int c : p.channels) touched[static_cast<std::size_t>(chars_[static_cast<std::size_t>(p.character)].c_offset + c)] = 1;
+        for (int c : p.channels)
+          touched[static_cast<std::size_t>(chars_[static_cast<std::size_t>(p.character)].c_offset + c)] = 1;
     }
     return touched;
   }
@@ -692,7 +702,8 @@ class Pass {
           if (gi == 0) continue;
           ch.gradient[ci] += gi * wr;
           const double wgi = w * w * gi;
-          for (int k = 0; k < m; ++k) ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
+          for (int k = 0; k < m; ++k)
+            ch.normal(ci, piece.channels[static_cast<std::size_t>(k)]) += wgi * G(r, k);
         }
       }
     }
@@ -768,7 +779,7 @@ class Pass {
   std::vector<int> columns_;       // add_rows: band indexes the sample touches, in first-seen order
   Eigen::MatrixXd rows_dense_;     // add_rows: taken rows x columns, weighted
   Eigen::VectorXd rho_weighted_;
-  numerics::BandedCholesky saved_band_;      // the last step's matrix before factoring (lambda included)
+  numerics::BandedCholesky saved_band_;  // the last step's matrix before factoring (lambda included)
   Eigen::VectorXd saved_grad_;
   std::vector<char> held_at_save_;  // held_ when it was assembled
   bool saved_valid_ = false;
@@ -794,8 +805,9 @@ void check_characters(const SpacetimeProblem& problem) {
     const Skeleton& s = *cp.initial.skeleton;
     if (cp.initial.frame_count() < 1) throw std::invalid_argument(who + "initial motion has no frames");
     if (cp.initial.frame_count() != frames)
-      throw std::invalid_argument(who + std::to_string(cp.initial.frame_count()) + " frames, character 0 has " +
-                                  std::to_string(frames) + " (both must have the same frames)");
+      throw std::invalid_argument(who + std::to_string(cp.initial.frame_count()) +
+                                  " frames, character 0 has " + std::to_string(frames) +
+                                  " (both must have the same frames)");
     if (std::abs(cp.initial.fps - problem.characters[0].initial.fps) > 1e-9)
       throw std::invalid_argument(who + "frame rate differs from character 0's");
     if (!cp.frames_per_key.empty()) {
@@ -803,15 +815,16 @@ void check_characters(const SpacetimeProblem& problem) {
         throw std::invalid_argument(who + std::to_string(cp.frames_per_key.size()) + " key spacings for " +
                                     std::to_string(s.channel_count()) + " channels");
       for (int k2 : cp.frames_per_key)
-        if (k2 < 1) throw std::invalid_argument(who + "key spacing " + std::to_string(k2) + " (expected >= 1 frame)");
+        if (k2 < 1)
+          throw std::invalid_argument(who + "key spacing " + std::to_string(k2) + " (expected >= 1 frame)");
     }
     if (!cp.frozen.empty() && static_cast<int>(cp.frozen.size()) != s.channel_count())
       throw std::invalid_argument(who + std::to_string(cp.frozen.size()) + " frozen flags for " +
                                   std::to_string(s.channel_count()) + " channels");
     if (!cp.skeleton_per_frame.empty()) {
       if (static_cast<int>(cp.skeleton_per_frame.size()) != frames)
-        throw std::invalid_argument(who + std::to_string(cp.skeleton_per_frame.size()) + " per-frame skeletons for " +
-                                    std::to_string(frames) + " frames");
+        throw std::invalid_argument(who + std::to_string(cp.skeleton_per_frame.size()) +
+                                    " per-frame skeletons for " + std::to_string(frames) + " frames");
       for (const auto& sk : cp.skeleton_per_frame)
         if (!sk || sk->joint_count() != s.joint_count() || sk->channel_count() != s.channel_count())
           throw std::invalid_argument(who + "a per-frame skeleton differs in structure from the motion's");
@@ -823,7 +836,8 @@ void check_characters(const SpacetimeProblem& problem) {
 KindInfo check_constraint(const SpacetimeProblem& problem, const Constraint& c, int frames) {
   KindInfo info;
   info.kind = problem.kinds(c.kind);
-  if (info.kind == nullptr) throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
+  if (info.kind == nullptr)
+    throw std::invalid_argument(label_of(c) + ": unknown constraint kind '" + c.kind + "'");
   info.kind->check(c);
   info.rows = info.kind->rows(c);
   if (info.rows < 0) throw std::invalid_argument(label_of(c) + ": kind reports a negative row count");
@@ -837,8 +851,9 @@ KindInfo check_constraint(const SpacetimeProblem& problem, const Constraint& c, 
                                   " but the problem has " + std::to_string(nchar));
     const Skeleton& s = *problem.characters[static_cast<std::size_t>(p.character)].initial.skeleton;
     if (p.joint < 0 || p.joint >= s.joint_count())
-      throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) + " out of range (skeleton has " +
-                                  std::to_string(s.joint_count()) + " joints)");
+      throw std::invalid_argument(label_of(c) + ": joint " + std::to_string(p.joint) +
+                                  " out of range (skeleton has " + std::to_string(s.joint_count()) +
+                                  " joints)");
     if (!p.local.allFinite()) throw std::invalid_argument(label_of(c) + ": point offset is not finite");
   }
   if (const std::string problem = sample_locals_problem(c); !problem.empty())
@@ -849,14 +864,15 @@ KindInfo check_constraint(const SpacetimeProblem& problem, const Constraint& c, 
                                   " but the problem has " + std::to_string(nchar));
     const Skeleton& s = *problem.characters[static_cast<std::size_t>(ch.character)].initial.skeleton;
     if (ch.channel < 0 || ch.channel >= s.channel_count())
-      throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) + " out of range (" +
-                                  std::to_string(s.channel_count()) + " channels)");
+      throw std::invalid_argument(label_of(c) + ": channel " + std::to_string(ch.channel) +
+                                  " out of range (" + std::to_string(s.channel_count()) + " channels)");
   }
   const std::size_t want = c.points.size() + c.channels.size();
   for (const Sample& sm : c.samples) {
     if (sm.frames.size() != want)
       throw std::invalid_argument(label_of(c) + ": a sample has " + std::to_string(sm.frames.size()) +
-                                  " frames, expected " + std::to_string(want) + " (one per point and channel)");
+                                  " frames, expected " + std::to_string(want) +
+                                  " (one per point and channel)");
     for (int f : sm.frames)
       if (f < 0 || f >= frames)
         throw std::invalid_argument(label_of(c) + ": frame " + std::to_string(f) + " outside the clip [0, " +
@@ -876,7 +892,8 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
   check_characters(problem);
   const int frames = problem.characters[0].initial.frame_count();
   std::vector<KindInfo> kinds;
-  for (const Constraint& c : problem.constraints->constraints) kinds.push_back(check_constraint(problem, c, frames));
+  for (const Constraint& c : problem.constraints->constraints)
+    kinds.push_back(check_constraint(problem, c, frames));
   return kinds;
 }
 
@@ -892,7 +909,8 @@ std::vector<Character> make_characters(const SpacetimeProblem& problem, const st
     ch.m1 = m1[k];
     const int frames = static_cast<int>(ch.m1.rows());
     for (int f = 0; f < frames; ++f)
-      ch.skeleton.push_back(cp.skeleton_per_frame.empty() ? ch.base : cp.skeleton_per_frame[static_cast<std::size_t>(f)].get());
+      ch.skeleton.push_back(
+          cp.skeleton_per_frame.empty() ? ch.base : cp.skeleton_per_frame[static_cast<std::size_t>(f)].get());
     ch.layout = DisplacementLayout(frames, spacing[k]);
     ch.free.assign(static_cast<std::size_t>(ch.channels), true);
     for (std::size_t c = 0; c < cp.frozen.size(); ++c) ch.free[c] = !cp.frozen[c];
@@ -954,7 +972,7 @@ double linear_subproblem(Pass& pass, Iterate& s, double slope, const SpacetimeOp
 
 struct LineSearch {
   bool accepted = false;
-  double alpha = 1;   // the accepted step length along dx
+  double alpha = 1;    // the accepted step length along dx
   double F_trial = 0;  // F at x + alpha dx
 };
 
@@ -962,7 +980,8 @@ struct LineSearch {
 // backtracking from alpha = 1 by options.line_search_shrink until F decreases sufficiently
 // (Armijo: F(x + alpha dx) <= F(x) + armijo alpha slope). Leaves the pass evaluated (without
 // Jacobian) at the last trial point, s.trial.
-LineSearch line_search(Pass& pass, Iterate& s, double slope, bool full_step_evaluated, const SpacetimeOptions& o) {
+LineSearch line_search(Pass& pass, Iterate& s, double slope, bool full_step_evaluated,
+                       const SpacetimeOptions& o) {
   LineSearch ls;
   ls.F_trial = s.F;
   for (int tried = 0; tried < o.line_search_steps; ++tried, ls.alpha *= o.line_search_shrink) {
@@ -995,8 +1014,8 @@ struct Progress {
 
 // The stopping tests of an accepted step that did not converge: "" to go on, else why the pass
 // stops. F and `decrease` are the objective after the step and what the step took off it.
-const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F, double decrease, double alpha,
-                      const SpacetimeOptions& o) {
+const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F, double decrease,
+                      double alpha, const SpacetimeOptions& o) {
   // Stalled: what is left is what this key spacing can do (or the constraints contradict).
   const double worst_now = pass.worst_violation();
   const bool worst_stuck = worst_now > o.stuck_ratio * p.worst_before;
@@ -1009,7 +1028,8 @@ const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F,
   if (p.can_densify && p.history.size() > window &&
       worst_now > o.stall_ratio * p.history[p.history.size() - 1 - window])
     return "keys too far apart";
-  if (step_norm < o.min_step || decrease <= (alpha == 1 ? o.min_decrease : o.min_decrease_short) * (F + decrease) ||
+  if (step_norm < o.min_step ||
+      decrease <= (alpha == 1 ? o.min_decrease : o.min_decrease_short) * (F + decrease) ||
       (worst_stuck && decrease <= o.stuck_decrease * (F + decrease)))
     return "no further progress";
   return "";
@@ -1018,11 +1038,12 @@ const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F,
 void trace_iteration(const Pass& pass, const Iterate& s, double alpha, double step_norm, int pass_number,
                      std::chrono::steady_clock::time_point start, const SpacetimeOptions& o) {
   char line[200];
-  std::snprintf(line, sizeof line,
-                "pass %d it %d: F %.6g worst %.3g alpha %.3g lambda %.2g |dx| %.3g band %d x %d active %d at %.1f ms",
-                pass_number, s.iterations, s.F, pass.worst_violation(), alpha, s.lambda, step_norm, pass.band_size(),
-                pass.bandwidth(), pass.active_count(),
-                1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  std::snprintf(
+      line, sizeof line,
+      "pass %d it %d: F %.6g worst %.3g alpha %.3g lambda %.2g |dx| %.3g band %d x %d active %d at %.1f ms",
+      pass_number, s.iterations, s.F, pass.worst_violation(), alpha, s.lambda, step_norm, pass.band_size(),
+      pass.bandwidth(), pass.active_count(),
+      1000 * std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
   o.trace(line);
 }
 
@@ -1097,8 +1118,8 @@ bool halve_key_spacing(std::vector<std::vector<int>>& spacing) {
 }
 
 // A violated row of the constraint `index` (first frame `first`) into its ViolatedConstraint.
-void note_violation(std::map<int, ViolatedConstraint>& by_constraint, int index, const Constraint& con, int first,
-                    double viol) {
+void note_violation(std::map<int, ViolatedConstraint>& by_constraint, int index, const Constraint& con,
+                    int first, double viol) {
   auto [it, fresh] = by_constraint.try_emplace(index);
   ViolatedConstraint& vc = it->second;
   if (fresh) {
@@ -1165,18 +1186,20 @@ std::string failure_message(const SpacetimeResult& result, const std::string& st
       metres = v.in_metres;
     }
   char head[160];
-  std::snprintf(head, sizeof head, "did not converge (%s after %d iterations, %d pass%s): %zu constraint%s still violated by up to %s",
-                stop.c_str(), result.iterations, result.passes, result.passes == 1 ? "" : "es",
-                result.violated.size(), result.violated.size() == 1 ? "" : "s",
-                format_length(worst, metres).c_str());
+  std::snprintf(
+      head, sizeof head,
+      "did not converge (%s after %d iterations, %d pass%s): %zu constraint%s still violated by up to %s",
+      stop.c_str(), result.iterations, result.passes, result.passes == 1 ? "" : "es", result.violated.size(),
+      result.violated.size() == 1 ? "" : "s", format_length(worst, metres).c_str());
   std::string msg = head;
   const std::size_t shown = std::min<std::size_t>(result.violated.size(), 5);
   for (std::size_t i = 0; i < shown; ++i) {
     const ViolatedConstraint& v = result.violated[i];
     msg += i == 0 ? ": " : "; ";
-    msg += v.kind + " '" + v.label + "' frame" + (v.first_frame == v.last_frame ? " " + std::to_string(v.first_frame)
-                                                                                 : "s " + std::to_string(v.first_frame) + "-" +
-                                                                                       std::to_string(v.last_frame)) +
+    msg += v.kind + " '" + v.label + "' frame" +
+           (v.first_frame == v.last_frame
+                ? " " + std::to_string(v.first_frame)
+                : "s " + std::to_string(v.first_frame) + "-" + std::to_string(v.last_frame)) +
            " (" + format_length(v.worst, v.in_metres) + ")";
   }
   if (result.violated.size() > shown) msg += "; ...";
@@ -1185,8 +1208,9 @@ std::string failure_message(const SpacetimeResult& result, const std::string& st
 
 std::string converged_message(const SpacetimeResult& result) {
   char head[160];
-  std::snprintf(head, sizeof head, "converged in %d iterations (%d pass%s), worst violation %s", result.iterations,
-                result.passes, result.passes == 1 ? "" : "es", format_length(result.worst_violation(), true).c_str());
+  std::snprintf(head, sizeof head, "converged in %d iterations (%d pass%s), worst violation %s",
+                result.iterations, result.passes, result.passes == 1 ? "" : "es",
+                format_length(result.worst_violation(), true).c_str());
   return head;
 }
 
@@ -1198,25 +1222,30 @@ void SpacetimeOptions::validate() const {
   using options::require;
   const char* o = "SpacetimeOptions";
   require(positive(epsilon), o, "epsilon", epsilon, "> 0 and finite");
-  require(positive(equality_tolerance), o, "equality_tolerance", equality_tolerance, "> 0 and finite (metres or radians)");
+  require(positive(equality_tolerance), o, "equality_tolerance", equality_tolerance,
+          "> 0 and finite (metres or radians)");
   require(positive(inequality_tolerance), o, "inequality_tolerance", inequality_tolerance,
           "> 0 and finite (metres or radians)");
   require(max_iterations >= 0, o, "max_iterations", max_iterations, ">= 0");
   require(non_negative(initial_damping), o, "initial_damping", initial_damping, ">= 0 and finite");
-  require(damping_decrease > 0 && damping_decrease <= 1, o, "damping_decrease", damping_decrease, "in (0, 1]");
+  require(damping_decrease > 0 && damping_decrease <= 1, o, "damping_decrease", damping_decrease,
+          "in (0, 1]");
   require(damping_increase >= 1 && std::isfinite(damping_increase), o, "damping_increase", damping_increase,
           ">= 1 and finite");
   require(non_negative(min_damping), o, "min_damping", min_damping, ">= 0 and finite");
   require(max_damping >= min_damping && std::isfinite(max_damping), o, "max_damping", max_damping,
           ">= min_damping (" + text::format_double(min_damping) + ") and finite");
   require(armijo > 0 && armijo < 1, o, "armijo", armijo, "in (0, 1)");
-  require(line_search_shrink > 0 && line_search_shrink < 1, o, "line_search_shrink", line_search_shrink, "in (0, 1)");
+  require(line_search_shrink > 0 && line_search_shrink < 1, o, "line_search_shrink", line_search_shrink,
+          "in (0, 1)");
   require(line_search_steps >= 1, o, "line_search_steps", line_search_steps, ">= 1");
   require(working_set_resolves >= 0, o, "working_set_resolves", working_set_resolves, ">= 0");
-  require(non_negative(working_set_release), o, "working_set_release", working_set_release, ">= 0 and finite");
+  require(non_negative(working_set_release), o, "working_set_release", working_set_release,
+          ">= 0 and finite");
   require(non_negative(min_step), o, "min_step", min_step, ">= 0 and finite");
   require(min_decrease >= 0 && min_decrease < 1, o, "min_decrease", min_decrease, "in [0, 1)");
-  require(min_decrease_short >= 0 && min_decrease_short < 1, o, "min_decrease_short", min_decrease_short, "in [0, 1)");
+  require(min_decrease_short >= 0 && min_decrease_short < 1, o, "min_decrease_short", min_decrease_short,
+          "in [0, 1)");
   require(stuck_ratio >= 0 && stuck_ratio <= 1, o, "stuck_ratio", stuck_ratio, "in [0, 1]");
   require(stuck_decrease >= 0 && stuck_decrease < 1, o, "stuck_decrease", stuck_decrease, "in [0, 1)");
   require(stall_window >= 1, o, "stall_window", stall_window, ">= 1");
@@ -1241,12 +1270,13 @@ Eigen::VectorXd channel_sensitivity(const Skeleton& skeleton) {
   std::vector<double> reach(static_cast<std::size_t>(nj), 0.0);
   auto spread = [&](int from, const Eigen::Vector3d& p) {
     for (int a = from; a >= 0; a = skeleton.joint(a).parent)
-      reach[static_cast<std::size_t>(a)] =
-          std::max(reach[static_cast<std::size_t>(a)], (p - world[static_cast<std::size_t>(a)].translation()).norm());
+      reach[static_cast<std::size_t>(a)] = std::max(
+          reach[static_cast<std::size_t>(a)], (p - world[static_cast<std::size_t>(a)].translation()).norm());
   };
   for (int j = 0; j < nj; ++j) {
     spread(j, world[static_cast<std::size_t>(j)].translation());
-    for (const Eigen::Vector3d& e : skeleton.joint(j).end_sites) spread(j, world[static_cast<std::size_t>(j)] * e);
+    for (const Eigen::Vector3d& e : skeleton.joint(j).end_sites)
+      spread(j, world[static_cast<std::size_t>(j)] * e);
   }
   Eigen::VectorXd s(skeleton.channel_count());
   for (int j = 0; j < nj; ++j) {
@@ -1282,8 +1312,8 @@ SpacetimeLinearization linearize_spacetime(const SpacetimeProblem& problem, cons
   std::vector<Character> chars = make_characters(problem, m1, spacing);
   Pass pass(chars, *problem.constraints, kinds, problem.options, false);
   if (x.size() != pass.unknown_total())
-    throw std::invalid_argument("linearize_spacetime: x has " + std::to_string(x.size()) + " entries, the problem " +
-                                std::to_string(pass.unknown_total()));
+    throw std::invalid_argument("linearize_spacetime: x has " + std::to_string(x.size()) +
+                                " entries, the problem " + std::to_string(pass.unknown_total()));
   pass.evaluate(x, true, true);
   SpacetimeLinearization out;
   out.residual = pass.weighted_residual();
@@ -1302,9 +1332,10 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
   std::vector<std::vector<int>> spacing;
   for (const CharacterProblem& cp : problem.characters) {
     m1.push_back(cp.initial.values);
-    spacing.push_back(cp.frames_per_key.empty()
-                          ? std::vector<int>(static_cast<std::size_t>(cp.initial.skeleton->channel_count()), 4)
-                          : cp.frames_per_key);
+    spacing.push_back(
+        cp.frames_per_key.empty()
+            ? std::vector<int>(static_cast<std::size_t>(cp.initial.skeleton->channel_count()), 4)
+            : cp.frames_per_key);
   }
 
   SpacetimeResult result;
@@ -1326,7 +1357,8 @@ SpacetimeResult solve_spacetime(const SpacetimeProblem& problem) {
     result.motions.push_back({init.skeleton, m1[k], init.fps, init.name});
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  result.message = outcome.converged ? converged_message(result) : failure_message(result, outcome.stop_reason);
+  result.message =
+      outcome.converged ? converged_message(result) : failure_message(result, outcome.stop_reason);
   return result;
 }
 

@@ -9,9 +9,9 @@
 #include <string>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/retarget/target.hpp"
 

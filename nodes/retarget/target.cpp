@@ -283,10 +283,13 @@ double height_factor(const Target& target, const PointRef& point, double t) {
   return weight > 1e-9 ? sum / weight : target.overall_scale(t);
 }
 
-ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character, double fps) {
+ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Target& target, int character,
+                                    double fps) {
   if (target.morphing() && !(fps > 0 && std::isfinite(fps)))
-    throw std::invalid_argument("constraints on a morphing target: the clip's frame rate is needed to scale points "
-                                "per frame (got " + std::to_string(fps) + ")");
+    throw std::invalid_argument(
+        "constraints on a morphing target: the clip's frame rate is needed to scale points "
+        "per frame (got " +
+        std::to_string(fps) + ")");
   const Eigen::VectorXd factors = target.joint_factors(0.0);
   std::map<int, Eigen::VectorXd> factors_at;  // frame -> factors, when morphing
   auto factor = [&](int joint, int frame) {
@@ -295,7 +298,9 @@ ConstraintSet constraints_on_target(const ConstraintSet& constraints, const Targ
     if (it == factors_at.end()) it = factors_at.emplace(frame, target.joint_factors(frame / fps)).first;
     return it->second[joint];
   };
-  auto moves = [&](const PointRef& p) { return p.character == character && p.joint >= 0 && p.joint < factors.size(); };
+  auto moves = [&](const PointRef& p) {
+    return p.character == character && p.joint >= 0 && p.joint < factors.size();
+  };
   ConstraintSet moved = constraints;
   for (Constraint& c : moved.constraints) {
     if (std::none_of(c.points.begin(), c.points.end(), moves)) continue;

@@ -44,7 +44,8 @@ class Reader : public kg::YamlReader {
       try {
         re = std::regex(e.key, std::regex::ECMAScript);
       } catch (const std::regex_error& err) {
-        fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(), e.key_node);
+        fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(),
+             e.key_node);
       }
       const double v = positive(e.value, what + "." + e.key);
       std::vector<std::string> matched, shadowed;
@@ -69,7 +70,8 @@ class Reader : public kg::YamlReader {
         matched.push_back(name);
       }
       if (matched.empty() && shadowed.empty())
-        fail("pattern " + text::in_quotes(e.key) + " in " + what + " matches no joint (the whole name must match)",
+        fail("pattern " + text::in_quotes(e.key) + " in " + what +
+                 " matches no joint (the whole name must match)",
              e.key_node);
       std::string note = what + " " + text::in_quotes(e.key) + " = " + text::significant(v) + ": " +
                          (matched.empty() ? std::string("no joint left") : text::join(matched));
@@ -80,7 +82,8 @@ class Reader : public kg::YamlReader {
   }
 
   LoadedTarget read(std::string_view text, std::shared_ptr<const Skeleton> source_ptr) const {
-    const YAML::Node root = load(text, "empty target file (expected version: 1 and one of bones, lengths, morph)");
+    const YAML::Node root =
+        load(text, "empty target file (expected version: 1 and one of bones, lengths, morph)");
     const std::vector<Entry> top = entries(root, "the target file");
     check_keys(top, "the target file", {"version", "default", "bones", "lengths", "morph"});
     check_version(top);
@@ -130,8 +133,8 @@ class Reader : public kg::YamlReader {
       const double t = number(time->value, what + ".time");
       if (t < 0) fail(what + ".time: expected seconds >= 0, got " + text::significant(t), time->value);
       if (!times.empty() && !(t > times.back()))
-        fail(what + ".time: key times must increase strictly, " + text::significant(t) + " s follows " + text::significant(times.back()) +
-                 " s",
+        fail(what + ".time: key times must increase strictly, " + text::significant(t) + " s follows " +
+                 text::significant(times.back()) + " s",
              time->value);
       const int forms = (scale != nullptr) + (kb != nullptr) + (kl != nullptr);
       if (forms != 1) fail(what + ": expected exactly one of 'scale', 'bones' or 'lengths'", key);

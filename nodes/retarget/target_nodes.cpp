@@ -3,13 +3,13 @@
 #include <cmath>
 #include <memory>
 
+#include "kg/base/text.hpp"
 #include "kg/builtin_nodes.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/target.hpp"
-#include "kg/base/text.hpp"
 
 namespace kg {
 namespace {
@@ -148,13 +148,15 @@ class KeySpacingNode final : public graph::Node {
 
 class ConstraintsOnTargetNode final : public graph::Node {
  public:
-  explicit ConstraintsOnTargetNode(const Params& p) : character_(static_cast<int>(p.get<std::int64_t>("character"))) {}
+  explicit ConstraintsOnTargetNode(const Params& p)
+      : character_(static_cast<int>(p.get<std::int64_t>("character"))) {}
   void run(RunContext& ctx) const override {
     const auto& constraints = ctx.input<retarget::ConstraintSet>("constraints");
     const auto& target = ctx.input<retarget::Target>("target");
     if (target.morphing() && !ctx.has_input("motion"))
-      throw std::invalid_argument("a morphing target scales points per frame: connect the clip to 'motion' (its "
-                                  "frame rate gives each frame's time)");
+      throw std::invalid_argument(
+          "a morphing target scales points per frame: connect the clip to 'motion' (its "
+          "frame rate gives each frame's time)");
     const double fps = ctx.has_input("motion") ? ctx.input<motion::Motion>("motion").fps : 0.0;
     ctx.output("constraints", retarget::constraints_on_target(constraints, target, character_, fps));
   }
@@ -167,14 +169,16 @@ NodeType constraints_on_target_type() {
   NodeSpec spec{
       .type = "retarget.constraints_on_target",
       .version = 1,
-      .doc = "Moves constraints measured on the source character onto the target: the offset of every point "
-             "fixed on a segment (a heel on the foot) is scaled by its joint's factor, as End Sites are; on a "
-             "morphing target, by the factor at each sample's frame. Targets (positions, distances) are kept: "
-             "they belong to the world.",
-      .inputs = {{"constraints", "kg.Constraints", true, "constraints with points in source segments"},
-                 {"target", "kg.Target", true, "the target character"},
-                 {"motion", "kg.Motion", false,
-                  "the clip the constraints' frames belong to (required for a morphing target: frame times)"}},
+      .doc =
+          "Moves constraints measured on the source character onto the target: the offset of every point "
+          "fixed on a segment (a heel on the foot) is scaled by its joint's factor, as End Sites are; on a "
+          "morphing target, by the factor at each sample's frame. Targets (positions, distances) are kept: "
+          "they belong to the world.",
+      .inputs =
+          {{"constraints", "kg.Constraints", true, "constraints with points in source segments"},
+           {"target", "kg.Target", true, "the target character"},
+           {"motion", "kg.Motion", false,
+            "the clip the constraints' frames belong to (required for a morphing target: frame times)"}},
       .outputs = {{"constraints", "kg.Constraints", true, "the same constraints with points on the target"}},
       .params = {{.name = "character",
                   .type = ParamType::Int,

@@ -6,8 +6,8 @@
 #include <sstream>
 
 #include "kg/builtin_nodes.hpp"
-#include "kg/retime/nodes.hpp"
 #include "kg/retime/contacts.hpp"
+#include "kg/retime/nodes.hpp"
 
 namespace kg {
 
@@ -146,13 +146,13 @@ NodeType contacts_type() {
                         "so; 0: off",
                     .min = 0.0,
                     .max = 100.0},
-          ParamSpec{.name = "floor",
-                    .type = ParamType::String,
-                    .default_value = std::string("auto"),
-                    .doc =
-                        "floor height in metres (the soles touch within height_threshold of it; rest_window_s "
-                        "is then unused), or 'auto' (each sole point's own lowest heights: captured floors "
-                        "slope and drift)"},
+          ParamSpec{
+              .name = "floor",
+              .type = ParamType::String,
+              .default_value = std::string("auto"),
+              .doc = "floor height in metres (the soles touch within height_threshold of it; rest_window_s "
+                     "is then unused), or 'auto' (each sole point's own lowest heights: captured floors "
+                     "slope and drift)"},
       }};
   return {spec, [](const Params& p) { return std::make_unique<ContactsNode>(p); }};
 }

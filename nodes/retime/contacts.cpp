@@ -10,8 +10,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/motion/kinematics.hpp"
 #include "kg/base/text.hpp"
+#include "kg/motion/kinematics.hpp"
 
 namespace kg::retime {
 
@@ -331,7 +331,8 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   if (supported > 0)
     notes.push_back(std::to_string(supported) +
                     " frames without plants touch where the root is held up (support_acceleration " +
-                    text::significant(o.support_acceleration, 3) + " m/s²): a foot near the floor however fast it moves");
+                    text::significant(o.support_acceleration, 3) +
+                    " m/s²): a foot near the floor however fast it moves");
   Contacts c = assemble_contacts(m, std::move(patches), active);
   c.source = "detected";
   c.notes = std::move(notes);
@@ -345,7 +346,8 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
 
 Eigen::Matrix<double, 3, 4> friction_basis(double mu) {
   if (!(mu >= 0) || !std::isfinite(mu))
-    throw std::invalid_argument("friction coefficient " + text::significant(mu, 3) + ": expected a finite number >= 0");
+    throw std::invalid_argument("friction coefficient " + text::significant(mu, 3) +
+                                ": expected a finite number >= 0");
   const double n = 1 / std::sqrt(1 + mu * mu), t = mu * n;
   Eigen::Matrix<double, 3, 4> P;
   P << t, -t, 0, 0,  //

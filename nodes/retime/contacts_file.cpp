@@ -17,7 +17,6 @@ namespace {
 using kg::Error;
 using kg::SourceLocation;
 
-
 class Reader : public kg::YamlReader {
  public:
   Reader(std::string file, const motion::Motion& motion) : YamlReader(std::move(file)), motion_(motion) {}

@@ -4,8 +4,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "kg/motion/rotations.hpp"
 #include "kg/body/body_build.hpp"
+#include "kg/motion/rotations.hpp"
 
 namespace kg::retime {
 
@@ -50,8 +50,8 @@ void resize(FrameTorques& t, int channels) {
 }
 
 const body::Vec3<PathGravity> kPathGravity{PathGravity::term<path_terms::gx>(1.0),
-                                     PathGravity::term<path_terms::gy>(1.0),
-                                     PathGravity::term<path_terms::gz>(1.0)};
+                                           PathGravity::term<path_terms::gy>(1.0),
+                                           PathGravity::term<path_terms::gz>(1.0)};
 
 // The path recursion for one frame: q̇ = q' ṗ, q̈ = q'' ṗ² + q' p̈, symbolic gravity.
 template <class F, class K, class Tau>
@@ -74,8 +74,8 @@ void path_pass(const body::BodyModel& body, const motion::Motion& clip, const Pa
 
 }  // namespace
 
-void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
-                   DynamicsWorkspace& ws, FrameTorques& out) {
+void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                   int frame, DynamicsWorkspace& ws, FrameTorques& out) {
   check_clip(body, clip, d, frame, "frame_torques");
   resize(out, body.skeleton->channel_count());
   using namespace path_terms;
@@ -95,8 +95,9 @@ FrameTorques frame_torques(const body::BodyModel& body, const motion::Motion& cl
   return out;
 }
 
-void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
-                              int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out) {
+void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip,
+                              const PathDerivatives& d, int frame, int joint, DynamicsWorkspace& ws,
+                              MassScaleTorques& out) {
   check_clip(body, clip, d, frame, "frame_torques_mass_scale");
   if (joint < 0 || joint >= body.skeleton->joint_count())
     throw std::invalid_argument("frame_torques_mass_scale: joint " + str(joint) +

@@ -15,8 +15,8 @@
 
 #include "kg/numerics/bounded_least_squares.hpp"
 
-#include "kg/retime/force_model.hpp"
 #include "kg/base/text.hpp"
+#include "kg/retime/force_model.hpp"
 
 namespace kg::retime {
 
@@ -64,7 +64,8 @@ struct Rows {
   int root_count = 0;
 };
 
-void make_rows(const body::BodyModel& body, const std::vector<bool>& root, const FrameTorques& t, Rows& rows) {
+void make_rows(const body::BodyModel& body, const std::vector<bool>& root, const FrameTorques& t,
+               Rows& rows) {
   rows.channel.clear();
   rows.lo.clear();
   rows.hi.clear();
@@ -451,8 +452,9 @@ FrameHull frame_hull(const body::BodyModel& body, const std::vector<bool>& root,
   h.centre_is_original = near.distance_squared <= eps * eps;
   h.centre = h.centre_is_original ? original : near.point;
   if (!h.centre_is_original)
-    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " + point_text(h.centre) +
-                          ", " + text::significant(std::sqrt(near.distance_squared), 4) + " away");
+    append_message(h, "(0, 1) lies outside the hull: centre at the nearest hull point " +
+                          point_text(h.centre) + ", " +
+                          text::significant(std::sqrt(near.distance_squared), 4) + " away");
   if (lp.minimise_patch_forces_at(h.centre, h.force_directions, h.column_patch) == FrameLp::Result::Optimal) {
     h.centre_lambda = w.lambda;
   } else {
@@ -487,7 +489,8 @@ int Hulls::count(HullStatus status) const {
 void HullOptions::validate() const {
   using options::require;
   const char* o = "HullOptions";
-  require(options::positive(pddot_max), o, "pddot_max", pddot_max, "> 0 and finite (source s per output s^2)");
+  require(options::positive(pddot_max), o, "pddot_max", pddot_max,
+          "> 0 and finite (source s per output s^2)");
   require(options::positive(pdot2_max), o, "pdot2_max", pdot2_max, "> 0 and finite");
   require(options::positive(tolerance), o, "tolerance", tolerance, "> 0 and finite (plane units)");
   require(initial_directions >= 3, o, "initial_directions", initial_directions, ">= 3");
@@ -495,8 +498,8 @@ void HullOptions::validate() const {
           ">= initial_directions + 1 (" + std::to_string(initial_directions + 1) + ")");
 }
 
-Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts, std::span<const FrameTorques> torques,
-                  const HullOptions& options) {
+Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts,
+                  std::span<const FrameTorques> torques, const HullOptions& options) {
   options.validate();
   if (!body.skeleton) throw std::invalid_argument("hulls: the body model has no skeleton");
   if (contacts.frame_count() != static_cast<int>(torques.size()))
@@ -519,8 +522,8 @@ Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts, std::sp
   return out;
 }
 
-FrameHull build_frame_hull(const body::BodyModel& body, const ContactFrame& contact, const FrameTorques& torques,
-                           const HullOptions& options) {
+FrameHull build_frame_hull(const body::BodyModel& body, const ContactFrame& contact,
+                           const FrameTorques& torques, const HullOptions& options) {
   options.validate();
   if (!body.skeleton) throw std::invalid_argument("hulls: the body model has no skeleton");
   Workspace w;

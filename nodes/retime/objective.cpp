@@ -34,8 +34,8 @@ Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, c
 
 std::vector<Eigen::VectorXd> original_torques(const Hulls& hulls, std::span<const FrameTorques> torques) {
   if (torques.size() != hulls.frames.size())
-    throw std::invalid_argument("original torques: " + std::to_string(torques.size()) + " frames of torques for " +
-                                std::to_string(hulls.frames.size()) + " hulls");
+    throw std::invalid_argument("original torques: " + std::to_string(torques.size()) +
+                                " frames of torques for " + std::to_string(hulls.frames.size()) + " hulls");
   std::vector<Eigen::VectorXd> out;
   out.reserve(torques.size());
   SectorTorques t;
@@ -53,7 +53,8 @@ double torque_scale(const motion::Skeleton& skeleton, std::span<const Eigen::Vec
   std::vector<bool> actuated(static_cast<std::size_t>(skeleton.channel_count()), true);
   for (const motion::Joint& joint : skeleton.joints())
     if (joint.parent < 0)
-      for (std::size_t c = 0; c < joint.channels.size(); ++c) actuated[static_cast<std::size_t>(joint.first_channel) + c] = false;
+      for (std::size_t c = 0; c < joint.channels.size(); ++c)
+        actuated[static_cast<std::size_t>(joint.first_channel) + c] = false;
   double sum = 0;
   long count = 0;
   for (const Eigen::VectorXd& tau : torques)
@@ -74,10 +75,11 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
                                 std::to_string(torques.size()) + " frames of torques and " +
                                 std::to_string(targets.size()) + " target torques (expected equal)");
   if (!(source_fps > 0)) throw std::invalid_argument("retiming objective: fps must be > 0");
-  if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.flight >= 0) || !(weights.torque_scale > 0) ||
-      !std::isfinite(flight_alpha_))
+  if (!(weights.alpha >= 0) || !(weights.beta >= 0) || !(weights.flight >= 0) ||
+      !(weights.torque_scale > 0) || !std::isfinite(flight_alpha_))
     throw std::invalid_argument(
-        "retiming objective: alpha, beta and the flight weight must be finite and >= 0 and the torque scale > 0");
+        "retiming objective: alpha, beta and the flight weight must be finite and >= 0 and the torque scale "
+        "> 0");
   const double w = weights.beta / (weights.torque_scale * weights.torque_scale);
   frames_.resize(frames);
   last_frame_ = static_cast<int>(frames) - 1;
@@ -86,7 +88,8 @@ BakedObjective::BakedObjective(const Hulls& hulls, std::span<const FrameTorques>
   std::vector<int> root_rows;
   for (const motion::Joint& joint : skeleton.joints())
     if (joint.parent < 0)
-      for (std::size_t c = 0; c < joint.channels.size(); ++c) root_rows.push_back(joint.first_channel + static_cast<int>(c));
+      for (std::size_t c = 0; c < joint.channels.size(); ++c)
+        root_rows.push_back(joint.first_channel + static_cast<int>(c));
   SectorTorques t;
   for (std::size_t f = 0; f < frames; ++f) {
     const FrameHull& hull = hulls.frames[f];
@@ -273,11 +276,12 @@ Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides
   A << q[1], q[2] / 2, q[2] / 2, q[0];
   const Eigen::Vector2d g(q[4], q[3]);
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> eig(A);
-  const Eigen::Vector2d lambda = eig.eigenvalues().cwiseMax(1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff()));
+  const Eigen::Vector2d lambda =
+      eig.eigenvalues().cwiseMax(1e-12 * std::max(1.0, eig.eigenvalues().maxCoeff()));
   const Eigen::Matrix2d V = eig.eigenvectors();
   const Eigen::Vector2d m = -0.5 * (V * (V.transpose() * g).cwiseQuotient(lambda));
-  const double level = tolerance * tolerance -
-                       (kg::retime::evaluate(q, m.x(), m.y()) + flight_least_[static_cast<std::size_t>(frame)]);
+  const double level = tolerance * tolerance - (kg::retime::evaluate(q, m.x(), m.y()) +
+                                                flight_least_[static_cast<std::size_t>(frame)]);
   Polygon out;
   if (!(level > 0)) return out;
   for (int k = 0; k < sides; ++k) {
@@ -290,7 +294,8 @@ Polygon BakedObjective::admissible_region(int frame, double tolerance, int sides
   return out;
 }
 
-BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot_squared, double tolerance) const {
+BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot_squared,
+                                            double tolerance) const {
   const FrameHull& hull = hulls_.frames.at(static_cast<std::size_t>(frame));
   const Eigen::Vector2d x(pddot, pdot_squared);
   int hint = 0;
@@ -300,7 +305,8 @@ BakedObjective::Parts BakedObjective::parts(int frame, double pddot, double pdot
   hint = sector;
   const HullPoint c = closest_point(hull, x, hint);
   out.feasibility = hull.status == HullStatus::Flight
-                        ? flight_alpha_ * kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)], pddot, pdot_squared)
+                        ? flight_alpha_ * kg::retime::evaluate(flight_[static_cast<std::size_t>(frame)],
+                                                               pddot, pdot_squared)
                         : weights_.alpha * c.distance_squared;
   out.inside = c.distance_squared <= tolerance * tolerance;
   return out;

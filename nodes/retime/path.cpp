@@ -14,7 +14,8 @@ namespace kg::retime {
 PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing) {
   motion.check();
   if (!(smoothing >= 0) || !std::isfinite(smoothing))
-    throw std::invalid_argument("path derivatives: smoothing " + std::to_string(smoothing) + " s (expected >= 0)");
+    throw std::invalid_argument("path derivatives: smoothing " + std::to_string(smoothing) +
+                                " s (expected >= 0)");
   const motion::Skeleton& skeleton = *motion.skeleton;
   const int frames = motion.frame_count();
   const int channels = skeleton.channel_count();
@@ -29,7 +30,8 @@ PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing)
     motion::unwrap_angles(std::span<double>(q.col(c).data(), static_cast<std::size_t>(frames)));
   }
   // A parabola past the ends: a ballistic flight keeps its second derivative to the last frame.
-  if (smoothing * motion.fps > 0.05) q = motion::gaussian_smoothed(q, smoothing * motion.fps, motion::CurveEnds::Parabola);
+  if (smoothing * motion.fps > 0.05)
+    q = motion::gaussian_smoothed(q, smoothing * motion.fps, motion::CurveEnds::Parabola);
   const double h = 1.0 / motion.fps;
   if (frames == 2) {
     d.first.row(0) = (q.row(1) - q.row(0)) / h;
@@ -45,7 +47,8 @@ PathDerivatives path_derivatives(const motion::Motion& motion, double smoothing)
   d.first.row(last) = (3 * q.row(last) - 4 * q.row(last - 1) + q.row(last - 2)) / (2 * h);
   if (frames >= 4) {
     d.second.row(0) = (2 * q.row(0) - 5 * q.row(1) + 4 * q.row(2) - q.row(3)) / (h * h);
-    d.second.row(last) = (2 * q.row(last) - 5 * q.row(last - 1) + 4 * q.row(last - 2) - q.row(last - 3)) / (h * h);
+    d.second.row(last) =
+        (2 * q.row(last) - 5 * q.row(last - 1) + 4 * q.row(last - 2) - q.row(last - 3)) / (h * h);
   } else {
     d.second.row(0) = d.second.row(1);
     d.second.row(last) = d.second.row(1);

@@ -110,7 +110,8 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
       for (const Eigen::VectorXd& t : original) targets.push_back(Eigen::VectorXd::Zero(t.size()));
       break;
     case TorqueTarget::Reference: {
-      if (reference.empty()) throw std::invalid_argument("retime: objective 'reference' needs the reference clip's torques");
+      if (reference.empty())
+        throw std::invalid_argument("retime: objective 'reference' needs the reference clip's torques");
       for (int f = 0; f < frames; ++f) {
         const std::size_t r = static_cast<std::size_t>(
             std::lround(static_cast<double>(f) / (frames - 1) * (static_cast<double>(reference.size()) - 1)));
@@ -244,7 +245,8 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
   if (!out.feasible && options.mode == RetimeMode::Optimise) {
     out.shortest = time_optimal_playback();
     if (out.shortest->feasible && options.solve.duration < out.shortest->duration)
-      message << " The requested duration " << fixed(options.solve.duration) << " s is shorter than any feasible "
+      message << " The requested duration " << fixed(options.solve.duration)
+              << " s is shorter than any feasible "
               << "playback: the shortest lasts " << fixed(out.shortest->duration) << " s.";
     else if (!out.shortest->feasible)
       message << " No timing keeps every frame inside its hull: " << out.shortest->message << ".";
@@ -291,8 +293,8 @@ void write_forces_json(std::ostream& os, const Hulls& hulls, std::span<const Fra
       w.begin_object();
       w.field("patch", hulls.patch_names.at(static_cast<std::size_t>(p.patch)));
       w.field("force", std::vector<double>{p.force.x(), p.force.y(), p.force.z()});
-      w.field("centre_of_pressure",
-              std::vector<double>{p.centre_of_pressure.x(), p.centre_of_pressure.y(), p.centre_of_pressure.z()});
+      w.field("centre_of_pressure", std::vector<double>{p.centre_of_pressure.x(), p.centre_of_pressure.y(),
+                                                        p.centre_of_pressure.z()});
       w.end_object();
     }
     w.end_array();

@@ -8,13 +8,13 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/builtin_nodes.hpp"
-#include "kg/retime/nodes.hpp"
 #include "kg/base/atomic_file.hpp"
 #include "kg/base/json.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
+#include "kg/retime/nodes.hpp"
 #include "kg/retime/playback.hpp"
 #include "kg/retime/retime_clip.hpp"
 #include "kg/retime/torque_limits.hpp"
@@ -58,9 +58,11 @@ class DynamicsNode final : public graph::Node {
     int joint = -1;
     if (!segment_.empty()) {
       joint = clip.skeleton->find_joint(segment_);
-      if (joint < 0) throw std::invalid_argument("segment '" + segment_ + "': no such joint in the motion's skeleton");
+      if (joint < 0)
+        throw std::invalid_argument("segment '" + segment_ + "': no such joint in the motion's skeleton");
       if (body.segments[static_cast<std::size_t>(joint)].mass == 0)
-        throw std::invalid_argument("segment '" + segment_ + "' is massless in the body model: scaling its mass "
+        throw std::invalid_argument("segment '" + segment_ +
+                                    "' is massless in the body model: scaling its mass "
                                     "changes nothing");
     }
     const auto start = std::chrono::steady_clock::now();
@@ -80,24 +82,26 @@ NodeType dynamics_node_type() {
   NodeSpec spec{
       .type = "retime.dynamics",
       .version = 1,
-      .doc = "Inverse dynamics along the clip's path (McCann et al. 2006 §3.1, eq. 5 and 6): per frame, the "
-             "generalised forces as coefficients of ṗ², p̈ and the gravity vector, from Featherstone's "
-             "recursive Newton-Euler over a polynomial scalar; with `segment`, also their change with that "
-             "segment's mass, so retime.hulls can make it heavier without running this again.",
+      .doc =
+          "Inverse dynamics along the clip's path (McCann et al. 2006 §3.1, eq. 5 and 6): per frame, the "
+          "generalised forces as coefficients of ṗ², p̈ and the gravity vector, from Featherstone's "
+          "recursive Newton-Euler over a polynomial scalar; with `segment`, also their change with that "
+          "segment's mass, so retime.hulls can make it heavier without running this again.",
       .inputs = {{"motion", "kg.Motion", true, "the clip (metres, radians)"},
                  {"body", "kg.BodyModel", true, "its masses and inertias (retime.body_model)"}},
       .outputs = {{"torques", "kg.PathTorques", true, "per frame: coefficients of ṗ², p̈ and g (N, N m)"}},
-      .params = {{.name = "segment",
-                  .type = ParamType::String,
-                  .default_value = std::string(),
-                  .doc = "a joint whose mass retime.hulls may scale (e.g. lfemur); \"\" for none"},
-                 {.name = "smoothing",
-                  .type = ParamType::Float,
-                  .default_value = 0.04,
-                  .doc = "s: the Gaussian the path's derivatives are taken through (capture noise of a millimetre "
-                         "is metres per second² at 120 Hz); 0: raw differences",
-                  .min = 0.0,
-                  .max = 10.0}}};
+      .params = {
+          {.name = "segment",
+           .type = ParamType::String,
+           .default_value = std::string(),
+           .doc = "a joint whose mass retime.hulls may scale (e.g. lfemur); \"\" for none"},
+          {.name = "smoothing",
+           .type = ParamType::Float,
+           .default_value = 0.04,
+           .doc = "s: the Gaussian the path's derivatives are taken through (capture noise of a millimetre "
+                  "is metres per second² at 120 Hz); 0: raw differences",
+           .min = 0.0,
+           .max = 10.0}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<DynamicsNode>(p); }};
 }
 
@@ -122,12 +126,13 @@ class TorqueLimitsNode final : public graph::Node {
     const TorqueLimitEstimate estimate = estimate_torque_limits(body, contacts, torques.frames, options_);
     for (const std::string& note : estimate.notes) ctx.log(note);
     ctx.report("frames_used", static_cast<std::int64_t>(estimate.count(FrameUse::Original) +
-                                                         estimate.count(FrameUse::Nearest) +
-                                                         estimate.count(FrameUse::Flight)));
+                                                        estimate.count(FrameUse::Nearest) +
+                                                        estimate.count(FrameUse::Flight)));
     ctx.report("frames_skipped", static_cast<std::int64_t>(estimate.count(FrameUse::Skipped)));
     double largest = 0;
     for (Eigen::Index c = 0; c < estimate.body.torque_max.size(); ++c)
-      if (std::isfinite(estimate.body.torque_max[c])) largest = std::max(largest, estimate.body.torque_max[c]);
+      if (std::isfinite(estimate.body.torque_max[c]))
+        largest = std::max(largest, estimate.body.torque_max[c]);
     ctx.report("largest_limit", largest);
     ctx.output("body", estimate.body);
   }
@@ -140,10 +145,12 @@ NodeType torque_limits_node_type() {
   NodeSpec spec{
       .type = "retime.torque_limits",
       .version = 1,
-      .doc = "Torque limits observed in the clip itself, as McCann et al. set theirs (§4): each actuated channel "
-             "may exert `margin` times the largest generalised force the clip needs at its original timing "
-             "(with the least contact force that explains it), at least `floor`. With margin >= 1 the original "
-             "timing stays inside every hull it was inside before. margin 0 keeps the body's own limits.",
+      .doc =
+          "Torque limits observed in the clip itself, as McCann et al. set theirs (§4): each actuated "
+          "channel "
+          "may exert `margin` times the largest generalised force the clip needs at its original timing "
+          "(with the least contact force that explains it), at least `floor`. With margin >= 1 the original "
+          "timing stays inside every hull it was inside before. margin 0 keeps the body's own limits.",
       .inputs = {{"body", "kg.BodyModel", true, "the body whose limits are set"},
                  {"contacts", "kg.Contacts", true, "the clip's contacts"},
                  {"torques", "kg.PathTorques", true, "the clip's torque coefficients (retime.dynamics)"}},
@@ -194,7 +201,8 @@ class HullsNode final : public graph::Node {
           "feet the contacts found and their thresholds (retime.contacts: height_threshold, speed_threshold, "
           "floor), or give the contacts in a file (path)");
     body.gravity = gravity_from(gravity_, body.gravity);
-    if (mass_scale_ != 1) ctx.log("segment " + source.segment + " weighs " + std::to_string(mass_scale_) + " times its mass");
+    if (mass_scale_ != 1)
+      ctx.log("segment " + source.segment + " weighs " + std::to_string(mass_scale_) + " times its mass");
     // The physical edits (§4.2) act on the coefficients: no inverse dynamics again.
     PathTorques edited{source.skeleton, source.fps, {}, "", {}};
     edited.frames.reserve(source.frames.size());
@@ -230,47 +238,50 @@ NodeType hulls_node_type() {
   NodeSpec spec{
       .type = "retime.hulls",
       .version = 1,
-      .doc = "Per frame, the timings (p̈, ṗ²) the body can follow the path at (McCann et al. 2006 §3.3, eq. 13): "
-             "the projection of the polytope of contact forces within friction cones and torques within limits, "
-             "found with GLPK by LPs in swept directions refined to `tolerance`, with λ at each vertex and the "
-             "centre at the original timing (0, 1) of least contact force; the force model's fan (§3.4). Frames "
-             "in flight and frames no contact forces can explain get their least-squares point, reported. The "
-             "physical edits of §4.2 (`gravity`, a segment's `mass_scale`) change the coefficients, not the "
-             "inverse dynamics. Nodes of one run with the same params and inputs (graphs/retime.yaml's "
-             "reference and hulls when nothing is edited) build once: the executor shares their results.",
+      .doc =
+          "Per frame, the timings (p̈, ṗ²) the body can follow the path at (McCann et al. 2006 §3.3, eq. 13): "
+          "the projection of the polytope of contact forces within friction cones and torques within limits, "
+          "found with GLPK by LPs in swept directions refined to `tolerance`, with λ at each vertex and the "
+          "centre at the original timing (0, 1) of least contact force; the force model's fan (§3.4). Frames "
+          "in flight and frames no contact forces can explain get their least-squares point, reported. The "
+          "physical edits of §4.2 (`gravity`, a segment's `mass_scale`) change the coefficients, not the "
+          "inverse dynamics. Nodes of one run with the same params and inputs (graphs/retime.yaml's "
+          "reference and hulls when nothing is edited) build once: the executor shares their results.",
       .inputs = {{"body", "kg.BodyModel", true, "masses, torque limits, friction and gravity"},
                  {"contacts", "kg.Contacts", true, "which contact vertices touch at each frame"},
                  {"torques", "kg.PathTorques", true, "the torque coefficients per frame (retime.dynamics)"}},
       .outputs = {{"hulls", "kg.Hulls", true, "per frame: status, hull, λ at its vertices, centre, fan"},
-                  {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (edits applied)"}},
-      .params = {{.name = "gravity",
-                  .type = ParamType::FloatList,
-                  .default_value = std::vector<double>{},
-                  .doc = "m/s^2: one number (straight down) or a world vector x y z (+Y up); empty: the body's"},
-                 {.name = "mass_scale",
-                  .type = ParamType::Float,
-                  .default_value = 1.0,
-                  .doc = "the modelled segment's mass (and inertia) times this (retime.dynamics' `segment`)",
-                  .min = 1e-6,
-                  .max = 1e6},
-                 {.name = "tolerance",
-                  .type = ParamType::Float,
-                  .default_value = 1e-3,
-                  .doc = "how far the true hull may reach beyond an edge found (plane units of p̈ and ṗ²)",
-                  .min = 1e-9,
-                  .max = 1.0},
-                 {.name = "pddot_max",
-                  .type = ParamType::Float,
-                  .default_value = 20.0,
-                  .doc = "the plane's box: |p̈| at most this (1/s)",
-                  .min = 1e-3,
-                  .max = 1e6},
-                 {.name = "pdot2_max",
-                  .type = ParamType::Float,
-                  .default_value = 16.0,
-                  .doc = "the plane's box: ṗ² at most this (16: four times the original speed)",
-                  .min = 1e-3,
-                  .max = 1e6}}};
+                  {"torques", "kg.PathTorques", true,
+                   "the coefficients the hulls were built with (edits applied)"}},
+      .params = {
+          {.name = "gravity",
+           .type = ParamType::FloatList,
+           .default_value = std::vector<double>{},
+           .doc = "m/s^2: one number (straight down) or a world vector x y z (+Y up); empty: the body's"},
+          {.name = "mass_scale",
+           .type = ParamType::Float,
+           .default_value = 1.0,
+           .doc = "the modelled segment's mass (and inertia) times this (retime.dynamics' `segment`)",
+           .min = 1e-6,
+           .max = 1e6},
+          {.name = "tolerance",
+           .type = ParamType::Float,
+           .default_value = 1e-3,
+           .doc = "how far the true hull may reach beyond an edge found (plane units of p̈ and ṗ²)",
+           .min = 1e-9,
+           .max = 1.0},
+          {.name = "pddot_max",
+           .type = ParamType::Float,
+           .default_value = 20.0,
+           .doc = "the plane's box: |p̈| at most this (1/s)",
+           .min = 1e-3,
+           .max = 1e6},
+          {.name = "pdot2_max",
+           .type = ParamType::Float,
+           .default_value = 16.0,
+           .doc = "the plane's box: ṗ² at most this (16: four times the original speed)",
+           .min = 1e-3,
+           .max = 1e6}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<HullsNode>(p); }};
 }
 
@@ -284,8 +295,9 @@ class RetimeNode final : public graph::Node {
     const std::vector<double> sources = p.get<std::vector<double>>("pin_source");
     const std::vector<double> outputs = p.get<std::vector<double>>("pin_output");
     if (sources.size() != outputs.size())
-      throw std::invalid_argument("pin_source has " + std::to_string(sources.size()) + " times and pin_output " +
-                                  std::to_string(outputs.size()) + " (expected one output time per source time)");
+      throw std::invalid_argument("pin_source has " + std::to_string(sources.size()) +
+                                  " times and pin_output " + std::to_string(outputs.size()) +
+                                  " (expected one output time per source time)");
     for (std::size_t i = 0; i < sources.size(); ++i) {
       if (!std::isfinite(sources[i]) || !std::isfinite(outputs[i]))
         throw std::invalid_argument("pin " + std::to_string(i) + ": pin_source " + shown(sources[i]) +
@@ -296,7 +308,8 @@ class RetimeNode final : public graph::Node {
     options_.target = objective == "minimal"     ? TorqueTarget::Zero
                       : objective == "reference" ? TorqueTarget::Reference
                                                  : TorqueTarget::Original;
-    options_.mode = p.get<std::string>("mode") == "time_optimal" ? RetimeMode::TimeOptimal : RetimeMode::Optimise;
+    options_.mode =
+        p.get<std::string>("mode") == "time_optimal" ? RetimeMode::TimeOptimal : RetimeMode::Optimise;
     options_.alpha = p.get<double>("alpha");
     options_.beta = p.get<double>("beta");
     options_.flight_weight = p.get<double>("flight_weight");
@@ -318,15 +331,17 @@ class RetimeNode final : public graph::Node {
     const PathTorques& torques = ctx.input<PathTorques>("torques");
     if (motion.frame_count() != static_cast<int>(hulls.frames.size()) ||
         torques.frame_count() != motion.frame_count())
-      throw std::invalid_argument("the motion has " + std::to_string(motion.frame_count()) + " frames, the hulls " +
-                                  std::to_string(hulls.frames.size()) + " and the torques " +
-                                  std::to_string(torques.frame_count()) + " (expected the same clip)");
+      throw std::invalid_argument("the motion has " + std::to_string(motion.frame_count()) +
+                                  " frames, the hulls " + std::to_string(hulls.frames.size()) +
+                                  " and the torques " + std::to_string(torques.frame_count()) +
+                                  " (expected the same clip)");
     ClipRetimeOptions options = options_;
     options.solve.duration = duration_ > 0 ? duration_ : duration_scale_ * motion.duration();
     std::vector<Eigen::VectorXd> reference;
     if (options.target == TorqueTarget::Reference) {
       if (!ctx.has_input("reference_hulls") || !ctx.has_input("reference_torques"))
-        throw std::invalid_argument("objective 'reference' needs reference_hulls and reference_torques connected");
+        throw std::invalid_argument(
+            "objective 'reference' needs reference_hulls and reference_torques connected");
       const PathTorques& rt = ctx.input<PathTorques>("reference_torques");
       reference = original_torques(ctx.input<Hulls>("reference_hulls"), rt.frames);
     }
@@ -395,28 +410,35 @@ NodeType retime_node_type() {
   NodeSpec spec{
       .type = "retime.retime",
       .version = 2,
-      .doc = "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic spline, "
-             "that minimises α·(distance to each frame's hull)² + β·|τ − τ'|² over the output (eq. 14, baked per "
-             "frame and sector), with the ends kept, the duration given and any pins (source moments at output "
-             "times) met exactly, by L-BFGS; τ' keeps the look (match), least effort (minimal) or another clip's "
-             "(reference). mode time_optimal finds the shortest playback within the hulls instead. The result "
-             "reports the share of output frames inside their hulls and, when the duration asks the impossible, "
-             "the shortest feasible one. Files are written by sinks: io.write_report (the report), "
-             "retime.write_curves (p(t)), retime.write_forces (per-frame forces).",
+      .doc =
+          "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic "
+          "spline, "
+          "that minimises α·(distance to each frame's hull)² + β·|τ − τ'|² over the output (eq. 14, baked "
+          "per "
+          "frame and sector), with the ends kept, the duration given and any pins (source moments at output "
+          "times) met exactly, by L-BFGS; τ' keeps the look (match), least effort (minimal) or another "
+          "clip's "
+          "(reference). mode time_optimal finds the shortest playback within the hulls instead. The result "
+          "reports the share of output frames inside their hulls and, when the duration asks the impossible, "
+          "the shortest feasible one. Files are written by sinks: io.write_report (the report), "
+          "retime.write_curves (p(t)), retime.write_forces (per-frame forces).",
       .inputs = {{"motion", "kg.Motion", true, "the source clip (the one the hulls were built for)"},
                  {"hulls", "kg.Hulls", true, "per-frame hulls and force model (retime.hulls)"},
-                 {"torques", "kg.PathTorques", true, "the coefficients the hulls were built with (retime.hulls)"},
+                 {"torques", "kg.PathTorques", true,
+                  "the coefficients the hulls were built with (retime.hulls)"},
                  {"reference_hulls", "kg.Hulls", false, "objective reference: the other clip's hulls"},
-                 {"reference_torques", "kg.PathTorques", false, "objective reference: the other clip's torques"}},
-      .outputs = {{"motion", "kg.Motion", true, "the retimed clip at `fps`"},
-                  {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"},
-                  {.name = "report",
-                   .type = "kg.Report",
-                   .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
-                          "at `fps`, solve_seconds (null with --reproducible); set also when the node fails "
-                          "(failed: true, feasible, shortest_duration) and then still delivered, for "
-                          "io.write_report to say why",
-                   .kept_on_failure = true}},
+                 {"reference_torques", "kg.PathTorques", false,
+                  "objective reference: the other clip's torques"}},
+      .outputs =
+          {{"motion", "kg.Motion", true, "the retimed clip at `fps`"},
+           {"warp", "kg.TimeWarp", true, "p(t): output seconds to source seconds"},
+           {.name = "report",
+            .type = "kg.Report",
+            .doc = "the objective's parts, share of frames inside their hulls, convergence, output_frames "
+                   "at `fps`, solve_seconds (null with --reproducible); set also when the node fails "
+                   "(failed: true, feasible, shortest_duration) and then still delivered, for "
+                   "io.write_report to say why",
+            .kept_on_failure = true}},
       .params = {
           {.name = "duration_scale",
            .type = ParamType::Float,
@@ -441,13 +463,15 @@ NodeType retime_node_type() {
           {.name = "objective",
            .type = ParamType::Enum,
            .default_value = std::string("match"),
-           .doc = "τ': match (the clip's own torques: keep the look), minimal (zero: least effort), reference "
-                  "(another clip's: wire reference_hulls and reference_torques)",
+           .doc =
+               "τ': match (the clip's own torques: keep the look), minimal (zero: least effort), reference "
+               "(another clip's: wire reference_hulls and reference_torques)",
            .choices = {"match", "minimal", "reference"}},
           {.name = "mode",
            .type = ParamType::Enum,
            .default_value = std::string("optimise"),
-           .doc = "optimise (eq. 14 for the duration and pins) or time_optimal (the shortest feasible playback)",
+           .doc =
+               "optimise (eq. 14 for the duration and pins) or time_optimal (the shortest feasible playback)",
            .choices = {"optimise", "time_optimal"}},
           {.name = "alpha",
            .type = ParamType::Float,
@@ -464,7 +488,8 @@ NodeType retime_node_type() {
           {.name = "flight_weight",
            .type = ParamType::Float,
            .default_value = 1.0,
-           .doc = "multiplies alpha on flight frames: above 1, when no timing meets every hull, the flight keeps "
+           .doc = "multiplies alpha on flight frames: above 1, when no timing meets every hull, the flight "
+                  "keeps "
                   "its speed (a wrong gravity shows at once) and the ground phases take the excess",
            .min = 0.0,
            .max = 1e12},
@@ -501,7 +526,8 @@ ParamSpec sink_path_param(const std::string& doc) {
 }
 
 // Writes `write`'s text to the node's path atomically; with no path, says that nothing was written.
-void write_sink_file(RunContext& ctx, const std::string& path, const std::function<void(std::ostream&)>& write) {
+void write_sink_file(RunContext& ctx, const std::string& path,
+                     const std::function<void(std::ostream&)>& write) {
   if (path.empty()) {
     ctx.log("no path: nothing written");
     ctx.report("written", false);
@@ -529,15 +555,17 @@ class WriteCurvesNode final : public graph::Node {
 };
 
 NodeType write_curves_node_type() {
-  NodeSpec spec{
-      .type = "retime.write_curves",
-      .version = 1,
-      .doc = "Writes a retiming's p(t), ṗ(t) and p̈(t) at each output frame of the retimed clip: CSV (t, p, pdot, "
-             "pddot), or JSON when the path ends in .json (the warp's controls too).",
-      .inputs = {{"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"},
-                 {"motion", "kg.Motion", true, "the retimed clip (retime.retime): its frame rate sets the frames"}},
-      .params = {sink_path_param("the .csv or .json file; \"\" writes none")},
-      .side_effects = true};
+  NodeSpec spec{.type = "retime.write_curves",
+                .version = 1,
+                .doc =
+                    "Writes a retiming's p(t), ṗ(t) and p̈(t) at each output frame of the retimed clip: CSV "
+                    "(t, p, pdot, "
+                    "pddot), or JSON when the path ends in .json (the warp's controls too).",
+                .inputs = {{"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"},
+                           {"motion", "kg.Motion", true,
+                            "the retimed clip (retime.retime): its frame rate sets the frames"}},
+                .params = {sink_path_param("the .csv or .json file; \"\" writes none")},
+                .side_effects = true};
   return {std::move(spec), [](const Params& p) { return std::make_unique<WriteCurvesNode>(p); }};
 }
 
@@ -550,8 +578,9 @@ class WriteForcesNode final : public graph::Node {
     const PathTorques& torques = ctx.input<PathTorques>("torques");
     const TimeWarp& warp = ctx.input<TimeWarp>("warp");
     if (static_cast<int>(hulls.frames.size()) != torques.frame_count())
-      throw std::invalid_argument("the hulls have " + std::to_string(hulls.frames.size()) + " frames and the torques " +
-                                  std::to_string(torques.frame_count()) + " (expected the same clip)");
+      throw std::invalid_argument("the hulls have " + std::to_string(hulls.frames.size()) +
+                                  " frames and the torques " + std::to_string(torques.frame_count()) +
+                                  " (expected the same clip)");
     write_sink_file(ctx, path_, [&](std::ostream& os) {
       write_forces_json(os, hulls, torques.frames, warp, torques.fps);
     });
@@ -565,8 +594,10 @@ NodeType write_forces_node_type() {
   NodeSpec spec{
       .type = "retime.write_forces",
       .version = 1,
-      .doc = "Writes, per source frame of a retiming, the hull, the timing (p̈, ṗ²) the warp plays it at and whether "
-             "that lies inside, the contact forces per patch there and the generalised forces (JSON).",
+      .doc =
+          "Writes, per source frame of a retiming, the hull, the timing (p̈, ṗ²) the warp plays it at and "
+          "whether "
+          "that lies inside, the contact forces per patch there and the generalised forces (JSON).",
       .inputs = {{"hulls", "kg.Hulls", true, "the hulls the retiming used (retime.hulls)"},
                  {"torques", "kg.PathTorques", true, "the coefficients they were built with (retime.hulls)"},
                  {"warp", "kg.TimeWarp", true, "p(t) (retime.retime)"}},

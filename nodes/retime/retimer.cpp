@@ -38,14 +38,16 @@ SampleGrid sample_grid(const TimeWarp& warp, double source_fps, int samples_per_
     total += std::max(1.0, steps);
     if (!(total <= kMaxGridSamples))  // also NaN, from controls that are not finite
       throw std::invalid_argument("sample grid: the warp plays segment " + std::to_string(s) + " at " +
-                                  std::to_string(warp.max_pdot(s)) + " source seconds per second, asking for more than " +
+                                  std::to_string(warp.max_pdot(s)) +
+                                  " source seconds per second, asking for more than " +
                                   std::to_string(kMaxGridSamples) + " samples");
     grid.steps[static_cast<std::size_t>(s)] = static_cast<int>(std::max(1.0, steps));
   }
   return grid;
 }
 
-double integrate(const PathObjective& objective, const TimeWarp& warp, const SampleGrid& grid, double* gradient) {
+double integrate(const PathObjective& objective, const TimeWarp& warp, const SampleGrid& grid,
+                 double* gradient) {
   if (static_cast<int>(grid.steps.size()) != warp.segments() ||
       std::any_of(grid.steps.begin(), grid.steps.end(), [](int n) { return n < 1; }))
     throw std::invalid_argument("integrate: a grid of " + std::to_string(grid.steps.size()) +
@@ -70,8 +72,8 @@ namespace {
 
 class WarpFunction final : public ceres::FirstOrderFunction {
  public:
-  WarpFunction(const PathObjective& objective, TimeWarp warp, Eigen::VectorXd particular, Eigen::MatrixXd basis,
-               SampleGrid grid, double barrier)
+  WarpFunction(const PathObjective& objective, TimeWarp warp, Eigen::VectorXd particular,
+               Eigen::MatrixXd basis, SampleGrid grid, double barrier)
       : objective_(objective),
         warp_(std::move(warp)),
         particular_(std::move(particular)),
@@ -145,17 +147,20 @@ void RetimeOptions::validate() const {
   using options::require;
   const char* o = "RetimeOptions";
   require(options::positive(duration), o, "duration", duration, "> 0 and finite (output seconds)");
-  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing, "> 0 and finite (output seconds)");
+  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing,
+          "> 0 and finite (output seconds)");
   const double segments = std::ceil(duration / knot_spacing - 1e-9);
   require(segments <= kMaxSegments, o, "knot_spacing", knot_spacing,
-          ">= duration / " + std::to_string(kMaxSegments) + " (" + shown(duration / kMaxSegments) + " s): it cuts the " +
-              shown(duration) + " s output into " + shown(segments) + " segments, at most " +
-              std::to_string(kMaxSegments) + " are solved");
+          ">= duration / " + std::to_string(kMaxSegments) + " (" + shown(duration / kMaxSegments) +
+              " s): it cuts the " + shown(duration) + " s output into " + shown(segments) +
+              " segments, at most " + std::to_string(kMaxSegments) + " are solved");
   require(samples_per_frame >= 1 && samples_per_frame <= kMaxSamplesPerFrame, o, "samples_per_frame",
           samples_per_frame, "1 to " + std::to_string(kMaxSamplesPerFrame));
   require(max_iterations >= 1, o, "max_iterations", max_iterations, ">= 1");
-  require(options::non_negative(function_tolerance), o, "function_tolerance", function_tolerance, ">= 0 and finite");
-  require(options::non_negative(gradient_tolerance), o, "gradient_tolerance", gradient_tolerance, ">= 0 and finite");
+  require(options::non_negative(function_tolerance), o, "function_tolerance", function_tolerance,
+          ">= 0 and finite");
+  require(options::non_negative(gradient_tolerance), o, "gradient_tolerance", gradient_tolerance,
+          ">= 0 and finite");
 }
 
 RetimeResult retime(const PathObjective& objective, const RetimeOptions& options) {
@@ -163,10 +168,12 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
   const int segments = checked_segments(options);
   const double source_duration = objective.source_duration();
   TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins, options.start);
-  const WarpConstraints constraints = warp_constraints(source_duration, options.duration, segments, options.pins);
+  const WarpConstraints constraints =
+      warp_constraints(source_duration, options.duration, segments, options.pins);
 
   // controls = particular + basis * y for every y: the constraints' null space (orthonormal).
-  const Eigen::Map<const Eigen::VectorXd> start_controls(warp.controls.data(), static_cast<Eigen::Index>(warp.controls.size()));
+  const Eigen::Map<const Eigen::VectorXd> start_controls(warp.controls.data(),
+                                                         static_cast<Eigen::Index>(warp.controls.size()));
   Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(constraints.A.transpose());
   const Eigen::Index rank = qr.rank();
   const Eigen::MatrixXd q = qr.householderQ();

@@ -58,30 +58,37 @@ void TimeOptimalOptions::validate() const {
   using options::require;
   const char* o = "TimeOptimalOptions";
   require(options::non_negative(point_tolerance), o, "point_tolerance", point_tolerance, ">= 0 and finite");
-  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing, "> 0 and finite (output seconds)");
+  require(options::positive(knot_spacing), o, "knot_spacing", knot_spacing,
+          "> 0 and finite (output seconds)");
 }
 
-TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, const TimeOptimalOptions& options) {
+TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps,
+                               const TimeOptimalOptions& options) {
   options.validate();
   const int frames = static_cast<int>(hulls.size());
-  if (frames < 2) throw std::invalid_argument("time-optimal retiming: " + std::to_string(frames) + " frames (expected >= 2)");
-  if (!(fps > 0) || !std::isfinite(fps)) throw std::invalid_argument("time-optimal retiming: fps must be > 0");
+  if (frames < 2)
+    throw std::invalid_argument("time-optimal retiming: " + std::to_string(frames) +
+                                " frames (expected >= 2)");
+  if (!(fps > 0) || !std::isfinite(fps))
+    throw std::invalid_argument("time-optimal retiming: fps must be > 0");
   std::vector<Polygon> sets(static_cast<std::size_t>(frames));
   for (int i = 0; i < frames; ++i) {
     if (hulls[static_cast<std::size_t>(i)].empty())
       throw std::invalid_argument("time-optimal retiming: frame " + std::to_string(i) + " has an empty hull");
     // ṗ² >= 0 always.
     sets[static_cast<std::size_t>(i)] =
-        clip(admissible(hulls[static_cast<std::size_t>(i)], fps, options.point_tolerance), Eigen::Vector2d(0, -1), 0);
+        clip(admissible(hulls[static_cast<std::size_t>(i)], fps, options.point_tolerance),
+             Eigen::Vector2d(0, -1), 0);
   }
 
   TimeOptimalResult result;
   // Backward pass: controllable ṗ² ranges.
   std::vector<double> lo(static_cast<std::size_t>(frames)), hi(static_cast<std::size_t>(frames));
   for (int i = frames - 1; i >= 0; --i) {
-    const Polygon p = i == frames - 1 ? sets.back()
-                                      : reaching(sets[static_cast<std::size_t>(i)], fps, lo[static_cast<std::size_t>(i + 1)],
-                                                 hi[static_cast<std::size_t>(i + 1)]);
+    const Polygon p =
+        i == frames - 1 ? sets.back()
+                        : reaching(sets[static_cast<std::size_t>(i)], fps,
+                                   lo[static_cast<std::size_t>(i + 1)], hi[static_cast<std::size_t>(i + 1)]);
     if (p.empty()) {
       result.blocking_frame = i;
       result.message = "no playback speed at source frame " + std::to_string(i) +
@@ -107,14 +114,16 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
       const Eigen::Vector2d& u = p[k];
       const Eigen::Vector2d& v = p[(k + 1) % p.size()];
       if (std::abs(u.y() - b) <= 1e-12 * std::max(1.0, b)) a_max = std::max(a_max, u.x());
-      if ((u.y() - b) * (v.y() - b) < 0) a_max = std::max(a_max, u.x() + (v.x() - u.x()) * (b - u.y()) / (v.y() - u.y()));
+      if ((u.y() - b) * (v.y() - b) < 0)
+        a_max = std::max(a_max, u.x() + (v.x() - u.x()) * (b - u.y()) / (v.y() - u.y()));
     }
     if (a_max == -kInf) {  // rounding at a vertex: take the nearest vertex's a
       double best = kInf;
       for (const Eigen::Vector2d& v : p)
         if (std::abs(v.y() - b) < best) best = std::abs(v.y() - b), a_max = v.x();
     }
-    b = std::clamp(b + 2 * a_max / fps, lo[static_cast<std::size_t>(i + 1)], hi[static_cast<std::size_t>(i + 1)]);
+    b = std::clamp(b + 2 * a_max / fps, lo[static_cast<std::size_t>(i + 1)],
+                   hi[static_cast<std::size_t>(i + 1)]);
   }
   result.pdot_squared.back() = b;
   // Output time of each frame: dt = dp / ṗ with ṗ averaged over the frame interval.
@@ -125,8 +134,8 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
                        std::sqrt(result.pdot_squared[static_cast<std::size_t>(i)]);
       if (!(v > 0)) {
         result.blocking_frame = i;
-        result.message = "the time-optimal playback stops between source frames " + std::to_string(i - 1) + " and " +
-                         std::to_string(i) + " (both at zero speed): no finite duration";
+        result.message = "the time-optimal playback stops between source frames " + std::to_string(i - 1) +
+                         " and " + std::to_string(i) + " (both at zero speed): no finite duration";
         return result;
       }
       t += 2 / (fps * v);
@@ -150,8 +159,8 @@ TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, co
   if (!result.warp.strictly_increasing()) {
     result.feasible = false;
     result.message = "the time-optimal profile (" + std::to_string(t) +
-                     " s) has no strictly increasing spline fit with knots every " + std::to_string(t / segments) +
-                     " s: playback nearly stops somewhere";
+                     " s) has no strictly increasing spline fit with knots every " +
+                     std::to_string(t / segments) + " s: playback nearly stops somewhere";
     return result;
   }
   result.message = "shortest feasible duration " + std::to_string(t) + " s";

@@ -26,7 +26,8 @@ void check_sizes(double source_duration, double duration, int segments) {
     throw std::invalid_argument("time warp: source duration " + seconds(source_duration) + " (expected > 0)");
   if (!(std::isfinite(duration) && duration > 0))
     throw std::invalid_argument("time warp: duration " + seconds(duration) + " (expected > 0)");
-  if (segments < 1) throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments (expected >= 1)");
+  if (segments < 1)
+    throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments (expected >= 1)");
 }
 
 // The weights of p at output time t on a warp of the given layout.
@@ -89,7 +90,8 @@ TimeWarp TimeWarp::uniform(double source_duration, double duration, int segments
   return warp;
 }
 
-WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins) {
+WarpConstraints warp_constraints(double source_duration, double duration, int segments,
+                                 const std::vector<Pin>& pins) {
   check_sizes(source_duration, duration, segments);
   for (std::size_t i = 0; i < pins.size(); ++i)  // before sorting: NaN does not order
     if (!std::isfinite(pins[i].source_time) || !std::isfinite(pins[i].output_time))
@@ -97,15 +99,18 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
                                   seconds(pins[i].source_time) + " at output " +
                                   seconds(pins[i].output_time) + "): expected finite times");
   std::vector<Pin> sorted = pins;
-  std::sort(sorted.begin(), sorted.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  std::sort(sorted.begin(), sorted.end(),
+            [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
   for (std::size_t i = 0; i < sorted.size(); ++i) {
     const Pin& pin = sorted[i];
-    const std::string name = "pin (source " + seconds(pin.source_time) + " at output " + seconds(pin.output_time) + ")";
+    const std::string name =
+        "pin (source " + seconds(pin.source_time) + " at output " + seconds(pin.output_time) + ")";
     if (!(pin.output_time > 0 && pin.output_time < duration))
-      throw std::invalid_argument("time warp: " + name + ": output time outside (0, " + seconds(duration) + ")");
-    if (!(pin.source_time > 0 && pin.source_time < source_duration))
-      throw std::invalid_argument("time warp: " + name + ": source time outside (0, " + seconds(source_duration) +
+      throw std::invalid_argument("time warp: " + name + ": output time outside (0, " + seconds(duration) +
                                   ")");
+    if (!(pin.source_time > 0 && pin.source_time < source_duration))
+      throw std::invalid_argument("time warp: " + name + ": source time outside (0, " +
+                                  seconds(source_duration) + ")");
     if (i > 0) {
       const Pin& before = sorted[i - 1];
       if (pin.output_time == before.output_time)
@@ -113,8 +118,8 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
       if (!(pin.source_time > before.source_time))
         throw std::invalid_argument("time warp: contradictory pins: source " + seconds(before.source_time) +
                                     " at output " + seconds(before.output_time) + " but source " +
-                                    seconds(pin.source_time) + " later, at output " + seconds(pin.output_time) +
-                                    " (playback cannot run backwards)");
+                                    seconds(pin.source_time) + " later, at output " +
+                                    seconds(pin.output_time) + " (playback cannot run backwards)");
     }
   }
   const int controls = segments + 3;
@@ -139,7 +144,8 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
   // output order.
   std::vector<Pin> knots = playback;
   for (std::size_t k = 1; k < knots.size(); ++k)
-    if (!(knots[k].output_time > knots[k - 1].output_time) || !(knots[k].source_time >= knots[k - 1].source_time))
+    if (!(knots[k].output_time > knots[k - 1].output_time) ||
+        !(knots[k].source_time >= knots[k - 1].source_time))
       throw std::invalid_argument("time warp: the starting playback's sample " + std::to_string(k) +
                                   " does not follow sample " + std::to_string(k - 1) +
                                   " (output times must increase, source times not decrease)");
@@ -148,13 +154,15 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
     knots = pins;
     knots.push_back({0, 0});
     knots.push_back({source_duration, duration});
-    std::sort(knots.begin(), knots.end(), [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+    std::sort(knots.begin(), knots.end(),
+              [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
   }
   auto linear = [&](double t) {
     const auto after = std::lower_bound(knots.begin() + 1, knots.end() - 1, t,
                                         [](const Pin& k, double time) { return k.output_time < time; });
     const Pin &a = *(after - 1), &b = *after;
-    return a.source_time + (t - a.output_time) * (b.source_time - a.source_time) / (b.output_time - a.output_time);
+    return a.source_time +
+           (t - a.output_time) * (b.source_time - a.source_time) / (b.output_time - a.output_time);
   };
   TimeWarp warp = TimeWarp::uniform(source_duration, duration, segments);
   const double h = warp.knot_spacing();
@@ -168,7 +176,8 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
   warp.controls.assign(c.data(), c.data() + c.size());
   if (!warp.strictly_increasing() || (A * c - constraints.b).cwiseAbs().maxCoeff() > 1e-9 * source_duration) {
     double closest = duration;
-    for (std::size_t i = 1; i < knots.size(); ++i) closest = std::min(closest, knots[i].output_time - knots[i - 1].output_time);
+    for (std::size_t i = 1; i < knots.size(); ++i)
+      closest = std::min(closest, knots[i].output_time - knots[i - 1].output_time);
     throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments of " + seconds(h) +
                                 " cannot pass the pins increasingly; the closest pins (or ends) are " +
                                 seconds(closest) + " apart: use shorter segments");
@@ -176,16 +185,19 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
   return warp;
 }
 
-TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments) {
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times,
+                  int segments) {
   if (output_times.size() != source_times.size() || output_times.size() < 2)
-    throw std::invalid_argument("time warp fit: " + std::to_string(output_times.size()) + " output times and " +
-                                std::to_string(source_times.size()) + " source times (expected equal, >= 2)");
+    throw std::invalid_argument("time warp fit: " + std::to_string(output_times.size()) +
+                                " output times and " + std::to_string(source_times.size()) +
+                                " source times (expected equal, >= 2)");
   if (output_times.front() != 0 || source_times.front() != 0)
     throw std::invalid_argument("time warp fit: the samples must start at output 0, source 0");
   for (std::size_t k = 1; k < output_times.size(); ++k)
     if (!(output_times[k] > output_times[k - 1]) || !(source_times[k] >= source_times[k - 1]))
       throw std::invalid_argument("time warp fit: sample " + std::to_string(k) + " does not follow sample " +
-                                  std::to_string(k - 1) + " (output times must increase, source times not decrease)");
+                                  std::to_string(k - 1) +
+                                  " (output times must increase, source times not decrease)");
   const double duration = output_times.back(), source_duration = source_times.back();
   check_sizes(source_duration, duration, segments);
   // The playback through the samples, linear between them and extended linearly past the ends.

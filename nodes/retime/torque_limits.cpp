@@ -8,8 +8,8 @@
 #include <limits>
 #include <stdexcept>
 
-#include "kg/body/body_build.hpp"
 #include "kg/base/text.hpp"
+#include "kg/body/body_build.hpp"
 
 namespace kg::retime {
 
@@ -271,8 +271,9 @@ TorqueLimitEstimate estimate_torque_limits(const body::BodyModel& body, std::spa
   }
 
   const int estimated = static_cast<int>(std::count(out.estimated.begin(), out.estimated.end(), true));
-  out.notes.push_back(std::to_string(estimated) + " channels limited to ±max(" + text::significant(options.margin, 4) +
-                      " x peak |τ|, " + text::significant(options.floor, 4) + ") over " + std::to_string(clips.size()) +
+  out.notes.push_back(std::to_string(estimated) + " channels limited to ±max(" +
+                      text::significant(options.margin, 4) + " x peak |τ|, " +
+                      text::significant(options.floor, 4) + ") over " + std::to_string(clips.size()) +
                       (clips.size() == 1 ? " clip" : " clips"));
   out.notes.push_back(
       "frames observed at (0, 1): " + std::to_string(out.count(FrameUse::Original)) +

@@ -19,20 +19,19 @@
 namespace {
 
 namespace fs = std::filesystem;
+using Catch::Matchers::Contains;
+using Catch::Matchers::StartsWith;
 using kg::test::read_file;
 using kg::test::Result;
 using kg::test::run_program;
 using kg::test::show;
 using kg::test::TempDir;
-using Catch::Matchers::Contains;
-using Catch::Matchers::StartsWith;
 
 const fs::path kKinegraph = fs::path(KG_BINARY_DIR) / "bin" / "kinegraph";
 const fs::path kTestPlugins = KG_TEST_PLUGIN_DIR;
 const fs::path kBadPlugins = fs::path(KG_TEST_PLUGIN_DIR) / "bad";
 
 using kg::test::kinegraph;
-
 
 // constant a (2) and constant b (${b}) -> add -> print to ${out}; line numbers matter below.
 const char* kSumGraph =
@@ -476,8 +475,10 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
     INFO(show(r));
     CHECK(r.code == 4);
     // The entry's own line and column.
-    CHECK_THAT(r.err, Contains("missing.yaml:" + std::to_string(line) + ":11: plugins: plugin 'no_such_plugin' not found; "
-                               "looked for " + (kTestPlugins / "no_such_plugin.so").string()));
+    CHECK_THAT(r.err, Contains("missing.yaml:" + std::to_string(line) +
+                               ":11: plugins: plugin 'no_such_plugin' not found; "
+                               "looked for " +
+                               (kTestPlugins / "no_such_plugin.so").string()));
     CHECK_FALSE(fs::exists(out));
   }
   SECTION("a bad plugin the graph names: exit 4") {
@@ -510,19 +511,22 @@ TEST_CASE("a missing built-in node module is a plugin error (exit 4)", "[cli]") 
   CHECK(run_program(dir / "bin" / "kinegraph", {"--help"}).code == 0);
 }
 
-TEST_CASE("a bad option of a built-in node is refused at load with file:line, before anything runs", "[cli]") {
+TEST_CASE("a bad option of a built-in node is refused at load with file:line, before anything runs",
+          "[cli]") {
   TempDir dir;
   const fs::path out = dir.path() / "never.bvh";
   const std::string text =
-      "version: 1\n"                                                        // 1
-      "nodes:\n"                                                            // 2
-      "  walk: {type: motion.synthesize}\n"                                 // 3
-      "  holds: {type: retarget.holds, params: {points: \"\"}}\n"           // 4
-      "  save: {type: io.export_bvh, params: {path: \"" + out.string() + "\"}}\n"  // 5
-      "connections:\n"                                                      // 6
-      "  - {from: walk.motion, to: holds.motion}\n"                         // 7
-      "  - {from: walk.motion, to: holds.motion2}\n"                        // 8
-      "  - {from: walk.motion, to: save.motion}\n";                         // 9
+      "version: 1\n"                                               // 1
+      "nodes:\n"                                                   // 2
+      "  walk: {type: motion.synthesize}\n"                        // 3
+      "  holds: {type: retarget.holds, params: {points: \"\"}}\n"  // 4
+      "  save: {type: io.export_bvh, params: {path: \"" +
+      out.string() +
+      "\"}}\n"                                        // 5
+      "connections:\n"                                // 6
+      "  - {from: walk.motion, to: holds.motion}\n"   // 7
+      "  - {from: walk.motion, to: holds.motion2}\n"  // 8
+      "  - {from: walk.motion, to: save.motion}\n";   // 9
   const fs::path graph = dir.write("bad_option.yaml", text);
   for (const char* verb : {"validate", "run"}) {
     const Result r = kinegraph({verb, graph.string()});

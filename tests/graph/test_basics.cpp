@@ -419,9 +419,12 @@ TEST_CASE("read_input_file reads whole files and protects them from every later 
 
   std::error_code ec;
   std::filesystem::create_hard_link(clip, dir.path() / "link.txt", ec);
-  if (!ec) CHECK_THROWS(write_file_atomically(dir.path() / "link.txt", [](std::ostream& os) { os << "oops"; }));
+  if (!ec)
+    CHECK_THROWS(write_file_atomically(dir.path() / "link.txt", [](std::ostream& os) { os << "oops"; }));
   CHECK_NOTHROW(write_file_atomically(dir.path() / "other.txt", [](std::ostream& os) { os << "fine"; }));
 
-  CHECK_THROWS_WITH(read_input_file(dir.path() / "absent.txt", "clip file"), Catch::Contains("absent.txt: no such clip file"));
-  CHECK_THROWS_WITH(read_input_file(dir.path(), "clip file"), Catch::Contains("clip file expected, got a directory"));
+  CHECK_THROWS_WITH(read_input_file(dir.path() / "absent.txt", "clip file"),
+                    Catch::Contains("absent.txt: no such clip file"));
+  CHECK_THROWS_WITH(read_input_file(dir.path(), "clip file"),
+                    Catch::Contains("clip file expected, got a directory"));
 }

@@ -385,7 +385,12 @@ TEST_CASE("a running node finds the registry's extensions through its context") 
   Registry registry;
   registry.add_extension(Extension::make<TestAnswer>(
       "answer", std::make_shared<const TestAnswer>(TestAnswer{42.0}), "a number"));
-  NodeSpec s{"test.lookup", 1, "Outputs the extension it finds, or -1.", {}, {{"out", "kg.Scalar", true, "a number"}}, {}};
+  NodeSpec s{"test.lookup",
+             1,
+             "Outputs the extension it finds, or -1.",
+             {},
+             {{"out", "kg.Scalar", true, "a number"}},
+             {}};
   registry.add_node({s, [](const Params&) {
                        return kg_test::make_fn_node([](RunContext& ctx) {
                          const std::shared_ptr<const TestAnswer> found = ctx.find<TestAnswer>("answer");
@@ -394,7 +399,8 @@ TEST_CASE("a running node finds the registry's extensions through its context") 
                          ctx.output("out", found && !missing && !other ? found->value : -1.0);
                        });
                      }});
-  const Graph g = load_graph_from_string("version: 1\nnodes:\n  look: {type: test.lookup}\n", "lookup.yaml", registry);
+  const Graph g =
+      load_graph_from_string("version: 1\nnodes:\n  look: {type: test.lookup}\n", "lookup.yaml", registry);
   Logged log;
   const RunResult r = run_graph(g, registry, log.options(1));
   REQUIRE(r.ok);
@@ -512,7 +518,8 @@ Registry lifetime_registry(std::shared_ptr<std::weak_ptr<const std::string>> pro
               }});
   r.add_node({NodeSpec{"test.alive", 1, "Whether the watched string lives.", {string_port("text")}, {}, {}},
               [probe](const Params&) {
-                return kg_test::make_fn_node([probe](RunContext& ctx) { ctx.report("alive", !probe->expired()); });
+                return kg_test::make_fn_node(
+                    [probe](RunContext& ctx) { ctx.report("alive", !probe->expired()); });
               }});
   return r;
 }
@@ -579,18 +586,20 @@ TEST_CASE("an output kept on failure reaches its consumers; the others skip", "[
   auto string_port = [](const std::string& name) { return PortSpec{name, "kg.String", true, "text"}; };
   PortSpec why = string_port("why");
   why.kept_on_failure = true;
-  registry.add_node({NodeSpec{"test.give_up", 1, "Sets why, then fails.", {}, {why, kg_test::scalar_port("out")}, {}},
-                     [](const Params&) {
-                       return kg_test::make_fn_node([](RunContext& ctx) {
-                         ctx.output("why", std::string("out of reach"));
-                         ctx.output("out", 1.0);
-                         throw std::runtime_error("gave up");
-                       });
-                     }});
-  registry.add_node({NodeSpec{"test.say", 1, "Logs its string.", {string_port("in")}, {}, {}},
-                     [](const Params&) {
-                       return kg_test::make_fn_node([](RunContext& ctx) { ctx.log("says " + ctx.input<std::string>("in")); });
-                     }});
+  registry.add_node(
+      {NodeSpec{"test.give_up", 1, "Sets why, then fails.", {}, {why, kg_test::scalar_port("out")}, {}},
+       [](const Params&) {
+         return kg_test::make_fn_node([](RunContext& ctx) {
+           ctx.output("why", std::string("out of reach"));
+           ctx.output("out", 1.0);
+           throw std::runtime_error("gave up");
+         });
+       }});
+  registry.add_node(
+      {NodeSpec{"test.say", 1, "Logs its string.", {string_port("in")}, {}, {}}, [](const Params&) {
+         return kg_test::make_fn_node(
+             [](RunContext& ctx) { ctx.log("says " + ctx.input<std::string>("in")); });
+       }});
   const char* text = R"(version: 1
 nodes:
   solver: {type: test.give_up}

@@ -49,7 +49,8 @@ double worst_joint_distance(const kg::motion::Motion& a, const kg::motion::Motio
   for (int jb = 0; jb < b.skeleton->joint_count(); ++jb) {
     const int ja = a.skeleton->find_joint(b.skeleton->joint(jb).name);
     REQUIRE(ja >= 0);
-    worst = std::max(worst, (pa.middleCols(3 * ja, 3) - pb.middleCols(3 * jb, 3)).rowwise().norm().maxCoeff());
+    worst =
+        std::max(worst, (pa.middleCols(3 * ja, 3) - pb.middleCols(3 * jb, 3)).rowwise().norm().maxCoeff());
   }
   return worst;
 }
@@ -73,8 +74,9 @@ TEST_CASE("every graph in graphs/ validates", "[graphs]") {
 
 TEST_CASE("graphs/demo.yaml runs on synthesized motion and writes readable clips", "[graphs]") {
   TempDir out;
-  const Result r = kinegraph({"run", (kSource / "graphs/demo.yaml").string(), "--set", "out=" + out.path().string(),
-                              "--jobs", "2", "--report", (out / "report.json").string()});
+  const Result r =
+      kinegraph({"run", (kSource / "graphs/demo.yaml").string(), "--set", "out=" + out.path().string(),
+                 "--jobs", "2", "--report", (out / "report.json").string()});
   INFO(show(r));
   REQUIRE(r.code == 0);
   CHECK(fs::exists(out / "report.json"));
@@ -102,24 +104,28 @@ TEST_CASE("graphs/demo.yaml runs on synthesized motion and writes readable clips
 
 TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legged and a morphing character",
           "[graphs][data]") {
-  const std::vector<fs::path> clips{kData / "cmu/bvh_motionbuilder/16_15.bvh", kData / "cmu/asf_amc/07_05.amc"};
+  const std::vector<fs::path> clips{kData / "cmu/bvh_motionbuilder/16_15.bvh",
+                                    kData / "cmu/asf_amc/07_05.amc"};
   if (!fs::exists(clips[0]) || !fs::exists(clips[1])) {
     WARN("skipped: 16_15.bvh or 07_05.amc not found in " << kData);
     return;
   }
   TempDir out;
   for (const fs::path& clip : clips) {
-    for (const std::string target : {"", "graphs/targets/short_legs_long_torso.yaml", "graphs/targets/morph_to_60.yaml"}) {
+    for (const std::string target :
+         {"", "graphs/targets/short_legs_long_torso.yaml", "graphs/targets/morph_to_60.yaml"}) {
       const fs::path output = out / "result.bvh", report = out / "metrics.json";
-      const Result r = kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
-                                  "--set", "target=" + (target.empty() ? "" : (kSource / target).string()), "--set",
-                                  "output=" + output.string(), "--set", "report=" + report.string()});
+      const Result r =
+          kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
+                     "--set", "target=" + (target.empty() ? "" : (kSource / target).string()), "--set",
+                     "output=" + output.string(), "--set", "report=" + report.string()});
       INFO(clip << " target " << target << "\n" << show(r));
       REQUIRE(r.code == 0);
       const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
       const auto result = kg::io::read_bvh(output).motion;
       CHECK(result.fps == Approx(30));
-      CHECK(result.frame_count() == kg::motion::resampled_frame_count(source.motion.frame_count(), source.motion.fps, 30));
+      CHECK(result.frame_count() ==
+            kg::motion::resampled_frame_count(source.motion.frame_count(), source.motion.fps, 30));
       // Equality constraints within 1 mm and no inequality violated by more (the issue's figure).
       const YAML::Node metrics = YAML::LoadFile(report.string());
       CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
@@ -132,8 +138,9 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
   }
 }
 
-TEST_CASE("graphs/retarget.yaml on bad input: unknown joints, contradictions, other skeletons, broken targets",
-          "[graphs][data]") {
+TEST_CASE(
+    "graphs/retarget.yaml on bad input: unknown joints, contradictions, other skeletons, broken targets",
+    "[graphs][data]") {
   const fs::path clip = kData / "cmu/bvh_motionbuilder/16_15.bvh";
   if (!fs::exists(clip)) {
     WARN("skipped: " << clip << " not found");
@@ -141,16 +148,18 @@ TEST_CASE("graphs/retarget.yaml on bad input: unknown joints, contradictions, ot
   }
   TempDir work;
   auto retarget = [&](const std::vector<std::string>& sets) {
-    std::vector<std::string> args{"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
-                                  "--set", "output=" + (work / "out.bvh").string(), "--set",
-                                  "report=" + (work / "metrics.json").string()};
+    std::vector<std::string> args{"run",   (kSource / "graphs/retarget.yaml").string(),
+                                  "--set", "input=" + clip.string(),
+                                  "--set", "output=" + (work / "out.bvh").string(),
+                                  "--set", "report=" + (work / "metrics.json").string()};
     for (const std::string& s : sets) args.insert(args.end(), {"--set", s});
     return kinegraph(args);
   };
 
   SECTION("a constraint naming an unknown joint: file, line and the nearest name") {
-    work.write("typo.yaml", "version: 1\nconstraints:\n  - kind: position\n    points: [{joint: lfot}]\n"
-                            "    params: [0, 0.1, 0]\n    frames: [10, 20]\n");
+    work.write("typo.yaml",
+               "version: 1\nconstraints:\n  - kind: position\n    points: [{joint: lfot}]\n"
+               "    params: [0, 0.1, 0]\n    frames: [10, 20]\n");
     const Result r = retarget({"constraints=" + (work / "typo.yaml").string()});
     INFO(show(r));
     CHECK(r.code == 1);
@@ -177,7 +186,8 @@ constraints:
     const Result strict = retarget({"constraints=" + (work / "contradiction.yaml").string(), "strict=true"});
     INFO(show(strict));
     CHECK(strict.code == 1);
-    CHECK_THAT(strict.err, Catch::Contains("node solve (retarget.spacetime) failed") && Catch::Contains("ankle"));
+    CHECK_THAT(strict.err,
+               Catch::Contains("node solve (retarget.spacetime) failed") && Catch::Contains("ankle"));
     CHECK_FALSE(fs::exists(work / "out.bvh"));
   }
 
@@ -204,7 +214,8 @@ constraints:
   }
 }
 
-TEST_CASE("graphs/retarget.yaml on runs, a jump and a long stand of several skeletons and units", "[graphs][data]") {
+TEST_CASE("graphs/retarget.yaml on runs, a jump and a long stand of several skeletons and units",
+          "[graphs][data]") {
   // CMU runs and a jump as ASF/AMC (ASF units, 120 Hz) and Daz BVH (cm), and 18 s of bending and
   // lifting on the iClone rig (cm, 60 Hz, 100 joints) whose feet stay planted for 15 s: the
   // non-skid chain must not drift over a plant that long.
@@ -220,9 +231,10 @@ TEST_CASE("graphs/retarget.yaml on runs, a jump and a long stand of several skel
     }
     ++ran;
     const fs::path output = out / "result.bvh", report = out / "metrics.json";
-    const Result r = kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
-                                "--set", "scale=0.7", "--set", "output=" + output.string(), "--set",
-                                "report=" + report.string(), "--set", "strict=true"});
+    const Result r =
+        kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + clip.string(),
+                   "--set", "scale=0.7", "--set", "output=" + output.string(), "--set",
+                   "report=" + report.string(), "--set", "strict=true"});
     INFO(clip << "\n" << show(r));
     REQUIRE(r.code == 0);
     const YAML::Node metrics = YAML::LoadFile(report.string());
@@ -243,16 +255,19 @@ TEST_CASE("graphs/salsa.yaml retargets the follow of the salsa pair, hands held,
   }
   TempDir out;
   const fs::path output = out / "follow.bvh", output2 = out / "lead.bvh", report = out / "metrics.json";
-  const Result r = kinegraph({"run", (kSource / "graphs/salsa.yaml").string(), "--set", "follow=" + follow.string(),
-                              "--set", "lead=" + lead.string(), "--set", "scale=0.8", "--set", "output=" + output.string(),
-                              "--set", "output2=" + output2.string(), "--set", "report=" + report.string()});
+  const Result r =
+      kinegraph({"run", (kSource / "graphs/salsa.yaml").string(), "--set", "follow=" + follow.string(),
+                 "--set", "lead=" + lead.string(), "--set", "scale=0.8", "--set", "output=" + output.string(),
+                 "--set", "output2=" + output2.string(), "--set", "report=" + report.string()});
   INFO(show(r));
   REQUIRE(r.code == 0);
   CHECK(r.err.find("solve: converged") != std::string::npos);
 
   // The follow is 80% of her size; the lead keeps his.
-  const kg::motion::Motion follow_source = kg::motion::resample(kg::io::import_motion(follow.string(), "", {}).motion, 30);
-  const kg::motion::Motion lead_source = kg::motion::resample(kg::io::import_motion(lead.string(), "", {}).motion, 30);
+  const kg::motion::Motion follow_source =
+      kg::motion::resample(kg::io::import_motion(follow.string(), "", {}).motion, 30);
+  const kg::motion::Motion lead_source =
+      kg::motion::resample(kg::io::import_motion(lead.string(), "", {}).motion, 30);
   const kg::motion::Motion small = kg::io::read_bvh(output).motion;
   const kg::motion::Motion lead_result = kg::io::read_bvh(output2).motion;
   REQUIRE(small.frame_count() == follow_source.frame_count());
@@ -266,7 +281,8 @@ TEST_CASE("graphs/salsa.yaml retargets the follow of the salsa pair, hands held,
   CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
   bool held = false;
   for (const YAML::Node& k : metrics["violation"]["kinds"])
-    if (k["kind"].as<std::string>() == "distance") held = k["rows"].as<int>() > 0 && k["violated_rows"].as<int>() == 0;
+    if (k["kind"].as<std::string>() == "distance")
+      held = k["rows"].as<int>() > 0 && k["violated_rows"].as<int>() == 0;
   CHECK(held);
 
   // The lead's lower body (frozen) is his captured one; his upper body moved to meet her.
@@ -277,7 +293,8 @@ TEST_CASE("graphs/salsa.yaml retargets the follow of the salsa pair, hands held,
     for (std::size_t k = 0; k < joint.channels.size(); ++k) {
       const int c = joint.first_channel + static_cast<int>(k);
       const double change = (lead_result.values.col(c) - lead_source.values.col(c)).cwiseAbs().maxCoeff();
-      (std::regex_match(joint.name, fixed) ? lower : upper) = std::max(std::regex_match(joint.name, fixed) ? lower : upper, change);
+      (std::regex_match(joint.name, fixed) ? lower : upper) =
+          std::max(std::regex_match(joint.name, fixed) ? lower : upper, change);
     }
   }
   CHECK(lower < 1e-4);  // the BVH's 6 decimals
@@ -292,7 +309,8 @@ TEST_CASE("graphs/convert.yaml converts every clip in ../shared/data", "[graphs]
   }
   TempDir out;
   for (const fs::path& clip : clips) {
-    const fs::path output = out / (clip.stem().string() + "_" + clip.parent_path().filename().string() + ".bvh");
+    const fs::path output =
+        out / (clip.stem().string() + "_" + clip.parent_path().filename().string() + ".bvh");
     const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
                                 "input=" + clip.string(), "--set", "output=" + output.string()});
     INFO(clip << "\n" << show(r));
@@ -319,9 +337,9 @@ TEST_CASE("graphs/convert.yaml resamples and overrides fps and units", "[graphs]
   }
   TempDir out;
   // 16_01.bvh says 30 fps but is 120 fps; ASF units (inches / 0.45).
-  const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + jump.string(),
-                              "--set", "output=" + (out / "jump.bvh").string(), "--set", "fps=120", "--set",
-                              "units=asf", "--set", "resample=30"});
+  const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                              "input=" + jump.string(), "--set", "output=" + (out / "jump.bvh").string(),
+                              "--set", "fps=120", "--set", "units=asf", "--set", "resample=30"});
   INFO(show(r));
   REQUIRE(r.code == 0);
   const auto source = kg::io::read_bvh(jump).motion;
@@ -335,9 +353,9 @@ TEST_CASE("graphs/convert.yaml never overwrites its input and refuses a malforme
   TempDir work;
   fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
   const std::string before = kg::test::read_file(work / "clip.bvh");
-  const Result same = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
-                                 "input=" + (work / "clip.bvh").string(), "--set",
-                                 "output=" + (work / "clip.bvh").string()});
+  const Result same =
+      kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                 "input=" + (work / "clip.bvh").string(), "--set", "output=" + (work / "clip.bvh").string()});
   CHECK(same.code == 3);
   CHECK(kg::test::read_file(work / "clip.bvh") == before);
 
@@ -405,8 +423,9 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
 
   // The graph file as the output: refused at load by convert.yaml, by the export of the other;
   // the graph is intact.
-  Result r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
-                        "--set", "output=" + (work / "convert.yaml").string()});
+  Result r =
+      kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
+                 "--set", "output=" + (work / "convert.yaml").string()});
   INFO(show(r));
   CHECK(r.code == 3);
   CHECK_THAT(r.err, Catch::Contains("no motion writer claims '.yaml'"));
@@ -420,8 +439,8 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
   CHECK(kg::test::read_file(work / "export_bvh.yaml") == other_before);
 
   // The run's report written over its input clip is refused; the clip is intact.
-  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(), "--set",
-                 "output=" + (work / "out.bvh").string(), "--report", (work / "clip.bvh").string()});
+  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "clip.bvh").string(),
+                 "--set", "output=" + (work / "out.bvh").string(), "--report", (work / "clip.bvh").string()});
   INFO(show(r));
   CHECK(r.code != 0);
   CHECK(kg::test::read_file(work / "clip.bvh") == clip_before);
@@ -434,8 +453,8 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
   fs::copy_file(asf, work / "16.asf");
   fs::copy_file(amc, work / "16_15.amc");
   const std::string asf_before = kg::test::read_file(work / "16.asf");
-  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "16_15.amc").string(), "--set",
-                 "output=" + (work / "16.asf").string()});
+  r = kinegraph({"run", (work / "convert.yaml").string(), "--set", "input=" + (work / "16_15.amc").string(),
+                 "--set", "output=" + (work / "16.asf").string()});
   INFO(show(r));
   CHECK(r.code == 3);
   CHECK(kg::test::read_file(work / "16.asf") == asf_before);

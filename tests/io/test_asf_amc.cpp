@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "kg/io/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/base/error.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/io/nodes.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace fs = std::filesystem;

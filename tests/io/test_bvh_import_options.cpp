@@ -9,9 +9,9 @@
 #include <string>
 #include <vector>
 
-#include "kg/io/nodes.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
+#include "kg/io/nodes.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
 

@@ -7,11 +7,11 @@
 #include <string>
 #include <vector>
 
-#include "kg/io/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/io/nodes.hpp"
 
 namespace {
 

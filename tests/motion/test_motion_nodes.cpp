@@ -2,10 +2,10 @@
 
 #include <map>
 
-#include "kg/motion/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/registry.hpp"
+#include "kg/motion/nodes.hpp"
 #include "kg/motion/resample.hpp"
 #include "motion_test_util.hpp"
 

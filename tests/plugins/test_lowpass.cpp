@@ -7,10 +7,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "kg/motion/nodes.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/plugin_loader.hpp"
 #include "kg/graph/yaml_io.hpp"
+#include "kg/motion/nodes.hpp"
 #include "plugin_test_util.hpp"
 
 using namespace kg_test;

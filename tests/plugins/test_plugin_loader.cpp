@@ -6,10 +6,10 @@
 
 #include <catch2/catch.hpp>
 
-#include "kg/motion/nodes.hpp"
 #include "kg/base/error.hpp"
 #include "kg/graph/plugin_abi.hpp"
 #include "kg/graph/plugin_loader.hpp"
+#include "kg/motion/nodes.hpp"
 #include "plugin_test_util.hpp"
 
 using namespace kg_test;
@@ -57,9 +57,9 @@ TEST_CASE("a good plugin loads: record, origin, nodes that run", "[plugins]") {
   CHECK(plugin.node_count == 6);
   CHECK(plugin.extension_count == 0);
   REQUIRE(loader.loaded().size() == 1);
-  CHECK(registry.node_type_names() ==
-        std::vector<std::string>{"test.add", "test.constant", "test.fail", "test.print", "test.read_number",
-                                 "test.rendezvous"});
+  CHECK(registry.node_type_names() == std::vector<std::string>{"test.add", "test.constant", "test.fail",
+                                                               "test.print", "test.read_number",
+                                                               "test.rendezvous"});
   CHECK(registry.node_origin("test.add") == fs::canonical(test_nodes_library()).string());
   CHECK(registry.node_owner("test.add") != nullptr);
   check_usable(registry, loader);

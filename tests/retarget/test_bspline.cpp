@@ -36,8 +36,8 @@ double kept_energy(const Eigen::VectorXd& signal, int spacing) {
 TEST_CASE("bspline: knot layout and control counts", "[bspline]") {
   CHECK(motion::bspline_segment_count(112, 4) == 28);  // ceil(111 / 4)
   CHECK(motion::bspline_control_count(112, 4) == 31);
-  CHECK(motion::bspline_control_count(9, 4) == 5);     // frames 0..8: segments [0,4], [4,8]
-  CHECK(motion::bspline_control_count(1, 4) == 4);     // one frame still has a whole segment
+  CHECK(motion::bspline_control_count(9, 4) == 5);  // frames 0..8: segments [0,4], [4,8]
+  CHECK(motion::bspline_control_count(1, 4) == 4);  // one frame still has a whole segment
   CHECK(motion::bspline_control_count(10, 1) == 12);
   // The last frame sits at the end of the last segment, not at the start of a new one.
   const motion::BasisAt last = motion::bspline_basis(8, 9, 4);
@@ -152,12 +152,12 @@ TEST_CASE("bspline: per-channel spacing, channel-major storage, apply", "[bsplin
   x[layout.unknown(1, 3)] = 6.0;  // channel 1's control sitting at frame 8
   kg::motion::FrameMatrix m1 = kg::motion::FrameMatrix::Constant(20, 3, 1.0);
   const kg::motion::FrameMatrix m = layout.apply(m1, x);
-  CHECK(m(8, 1) == Approx(1 + 4.0));   // 6 * 4/6
-  CHECK(m(4, 1) == Approx(1 + 1.0));   // 6 * 1/6 at the neighbouring knot
+  CHECK(m(8, 1) == Approx(1 + 4.0));  // 6 * 4/6
+  CHECK(m(4, 1) == Approx(1 + 1.0));  // 6 * 1/6 at the neighbouring knot
   CHECK(m(12, 1) == Approx(1 + 1.0));
-  CHECK(m(0, 1) == Approx(1.0));       // two keys away: the edge of the control's support
+  CHECK(m(0, 1) == Approx(1.0));  // two keys away: the edge of the control's support
   CHECK(m(16, 1) == Approx(1.0));
-  CHECK(m(3, 1) > 1.0);                // inside it
+  CHECK(m(3, 1) > 1.0);  // inside it
   CHECK(m.col(0).isApproxToConstant(1.0));
   CHECK(m.col(2).isApproxToConstant(1.0));
   CHECK_THROWS_AS(layout.sample(Eigen::VectorXd::Zero(5)), std::invalid_argument);

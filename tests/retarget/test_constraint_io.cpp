@@ -7,13 +7,13 @@
 #include <filesystem>
 #include <numbers>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;
@@ -22,7 +22,8 @@ using namespace kg::retarget;
 namespace {
 
 const synth::Synthesis& walk() {
-  static const synth::Synthesis w = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 30});
+  static const synth::Synthesis w =
+      synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 30});
   return w;
 }
 
@@ -163,20 +164,24 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
       {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftToe}]\n    params: [0, 0, 0]\n"
        "    frames: [1, 2]\n",
        "c.yaml:4:22: unknown joint 'LeftToe' (nearest: 'LeftToeBase')"},
-      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, 0]\n"
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, "
+       "0]\n"
        "    frames: [5, 2]\n",
        "c.yaml:6:13: constraints[0].frames: the range [5, 2] is reversed"},
-      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, 0]\n"
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, "
+       "0]\n"
        "    frames: [5, 100000]\n",
        "is outside the clip (frames 0.."},
-      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, 0]\n"
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, "
+       "0]\n"
        "    frames: [1, 2, 3]\n",
        "frames: expected [first, last], got 3 entries"},
       {"version: 1\nconstraints:\n  - kind: position\n    pionts: [{joint: LeftFoot}]\n",
        "c.yaml:4:5: unknown key 'constraints[0].pionts' (did you mean 'points'?)"},
       {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0]\n"
        "    frames: [1, 2]\n",
-       "c.yaml:3:5: constraints[0]: constraint 'position 0' (position): expects params [x y z] or [x y z mx my mz], "
+       "c.yaml:3:5: constraints[0]: constraint 'position 0' (position): expects params [x y z] or [x y z mx "
+       "my mz], "
        "got 2 numbers"},
       {"version: 1\nconstraints:\n  - kind: distance\n    points: [{joint: LeftFoot}, {joint: Head}]\n"
        "    params: [1]\n",
@@ -187,7 +192,8 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
       {"version: 2\n", "c.yaml:1:10: unsupported version 2"},
       {"constraints: []\n", "missing 'version: 1'"},
       {"version: 1\nconstraint: []\n", "unknown key 'constraint' (did you mean 'constraints'?)"},
-      {"version: 1\nconstraints:\n  - kind: parameter_range\n    channels: [LeftLeg.Xrot]\n    params: [0, 1]\n"
+      {"version: 1\nconstraints:\n  - kind: parameter_range\n    channels: [LeftLeg.Xrot]\n    params: [0, "
+       "1]\n"
        "    frames: [0, 1]\n",
        "joint 'LeftLeg' has no channel 'Xrot' (it has: Zrotation, Xrotation, Yrotation)"},
       {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot, offset: [0, 1]}]\n"
@@ -199,10 +205,12 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
       {"version: 1\nconstraints:\n  - kind: position\n    relation: above\n    points: [{joint: LeftFoot}]\n"
        "    params: [0, 0, 0]\n    frames: [0, 1]\n",
        "c.yaml:4:15: constraints[0].relation: relation 'above': expected equal, at_least or at_most"},
-      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, x, 0]\n"
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, x, "
+       "0]\n"
        "    frames: [0, 1]\n",
        "constraints[0].params: expected a number, got 'x'"},
-      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, 0]\n"
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n    params: [0, 0, "
+       "0]\n"
        "    frames: [0.5, 1]\n",
        "expected an integer, got '0.5'"},
       {"version: 1\nlimits:\n  \"Lef(tLeg\": {Xrotation: [0, 1]}\n", "bad regular expression"},
@@ -227,9 +235,10 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
 
 TEST_CASE("constraint files on disk, joint limits from skeletons, merging") {
   test::TempDir dir;
-  const auto path = dir.write("plants.yaml",
-                              "version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n"
-                              "    params: [0, 0.08, 0, 0, 1, 0]\n    frames: [0, 3]\n");
+  const auto path =
+      dir.write("plants.yaml",
+                "version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n"
+                "    params: [0, 0.08, 0, 0, 1, 0]\n    frames: [0, 3]\n");
   ConstraintSet set = read_constraints_file(path.string(), std::span(&walk().motion, 1));
   REQUIRE(set.constraints.size() == 1);
   CHECK_THROWS_WITH(read_constraints_file((dir / "absent.yaml").string(), std::span(&walk().motion, 1)),
@@ -237,10 +246,12 @@ TEST_CASE("constraint files on disk, joint limits from skeletons, merging") {
 
   // A skeleton with limits: one constraint per limited channel, every frame.
   motion::Skeleton sk;
-  sk.add_joint({.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Xposition}}, .end_sites = {}});
+  sk.add_joint(
+      {.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Xposition}}, .end_sites = {}});
   sk.add_joint({.name = "knee",
                 .parent = 0,
-                .channels = {{motion::ChannelKind::Xrotation, 0.0, 2.5}, {motion::ChannelKind::Yrotation},
+                .channels = {{motion::ChannelKind::Xrotation, 0.0, 2.5},
+                             {motion::ChannelKind::Yrotation},
                              {motion::ChannelKind::Zrotation, -kInf, 0.3}},
                 .end_sites = {}});
   const ConstraintSet limits = joint_limit_constraints(sk, 1, 7);
@@ -277,8 +288,8 @@ TEST_CASE("constraint files on disk, joint limits from skeletons, merging") {
   const ViolationSummary v = summarize_violations(asf_limits, kinds, std::span(&m, 1));
   const KindViolation* range = v.find("parameter_range");
   REQUIRE(range != nullptr);
-  INFO("worst " << range->worst << " rad at " << range->worst_label << ", violated rows " << range->violated_rows
-                << " of " << range->rows);
+  INFO("worst " << range->worst << " rad at " << range->worst_label << ", violated rows "
+                << range->violated_rows << " of " << range->rows);
   CHECK(range->violated_rows < range->rows / 10);
 
   // Joint names of the ASF resolve, with the nearest name for a misspelt one.
@@ -288,11 +299,13 @@ TEST_CASE("constraint files on disk, joint limits from skeletons, merging") {
   const ConstraintSet on_asf = read_constraints_string(text, "asf.yaml", std::span(&m, 1));
   REQUIRE(on_asf.constraints.size() == 1);
   CHECK(on_asf.constraints[0].points[0].joint == m.skeleton->find_joint("ltoes"));
-  CHECK(static_cast<double>(on_asf.constraints[0].samples.front().frames[0]) == Approx(std::round(1.0 * m.fps)));
+  CHECK(static_cast<double>(on_asf.constraints[0].samples.front().frames[0]) ==
+        Approx(std::round(1.0 * m.fps)));
   std::string misspelt = text;
   misspelt.replace(misspelt.find("ltoes"), 5, "ltoe");
-  CHECK_THROWS_WITH(read_constraints_string(misspelt, "asf.yaml", std::span(&m, 1)),
-                    Catch::Contains("asf.yaml:4:") && Catch::Contains("unknown joint 'ltoe' (nearest: 'ltoes')"));
+  CHECK_THROWS_WITH(
+      read_constraints_string(misspelt, "asf.yaml", std::span(&m, 1)),
+      Catch::Contains("asf.yaml:4:") && Catch::Contains("unknown joint 'ltoe' (nearest: 'ltoes')"));
 }
 
 TEST_CASE("retarget.constraints and retarget.merge_constraints nodes") {
@@ -317,15 +330,18 @@ TEST_CASE("retarget.constraints and retarget.merge_constraints nodes") {
   CHECK(ctx2.outputs.at("constraints").get<ConstraintSet>().constraints.size() == 2);
   CHECK(ctx2.logged("no channel limits"));
 
-  test::NodeContext merged = test::run_node(registry, "retarget.merge_constraints", {},
-                                            {{"a", ctx.outputs.at("constraints")}, {"c", ctx2.outputs.at("constraints")}});
+  test::NodeContext merged =
+      test::run_node(registry, "retarget.merge_constraints", {},
+                     {{"a", ctx.outputs.at("constraints")}, {"c", ctx2.outputs.at("constraints")}});
   CHECK(merged.outputs.at("constraints").get<ConstraintSet>().constraints.size() == 3);
   CHECK(std::get<std::string>(merged.figures.at("kinds")) == "distance 3");
 
   // A bad file fails the node with file:line.
-  const auto bad = dir.write("bad.yaml", "version: 1\nconstraints:\n  - kind: distance\n    points: [{joint: Nose}]\n");
-  CHECK_THROWS_WITH(test::run_node(registry, "retarget.constraints",
-                                   test::params_for(registry, "retarget.constraints", {{"path", bad.string()}}),
-                                   {{"motion", motion}}),
-                    Catch::Contains("bad.yaml:4:") && Catch::Contains("unknown joint 'Nose'"));
+  const auto bad =
+      dir.write("bad.yaml", "version: 1\nconstraints:\n  - kind: distance\n    points: [{joint: Nose}]\n");
+  CHECK_THROWS_WITH(
+      test::run_node(registry, "retarget.constraints",
+                     test::params_for(registry, "retarget.constraints", {{"path", bad.string()}}),
+                     {{"motion", motion}}),
+      Catch::Contains("bad.yaml:4:") && Catch::Contains("unknown joint 'Nose'"));
 }

@@ -7,10 +7,10 @@
 #include <numbers>
 #include <random>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;
@@ -25,7 +25,8 @@ Constraint make(std::string kind, Relation relation, int points, int channels, s
   c.kind = std::move(kind);
   c.label = "test " + c.kind;
   c.relation = relation;
-  for (int i = 0; i < points; ++i) c.points.push_back({.character = 0, .joint = i, .local = Eigen::Vector3d::Zero()});
+  for (int i = 0; i < points; ++i)
+    c.points.push_back({.character = 0, .joint = i, .local = Eigen::Vector3d::Zero()});
   for (int i = 0; i < channels; ++i) c.channels.push_back({.character = 0, .channel = i});
   c.params = std::move(params);
   Sample s;
@@ -97,8 +98,8 @@ TEST_CASE("parameter_range: range rows, equality and one-sided forms") {
   REQUIRE_NOTHROW(k.check(range));
   REQUIRE(k.rows(range) == 4);
   Eval e = eval(k, range, {}, {0.2, 1.5});
-  CHECK(e.r[0] == Approx(0.7));   // 0.2 - (-0.5)
-  CHECK(e.r[1] == Approx(0.8));   // 1.0 - 0.2
+  CHECK(e.r[0] == Approx(0.7));  // 0.2 - (-0.5)
+  CHECK(e.r[1] == Approx(0.8));  // 1.0 - 0.2
   CHECK(e.r[2] == Approx(2.0));
   CHECK(e.r[3] == Approx(-0.5));  // violated: above max
   for (int i = 0; i < 4; ++i) CHECK(k.is_inequality(range, i));
@@ -140,7 +141,7 @@ TEST_CASE("position and region: masked axes, inequalities, boxes") {
   REQUIRE(reg.rows(box) == 6);
   const Eval b = eval(reg, box, {{0.5, 2.5, -1}}, {});
   CHECK(b.r.minCoeff() == Approx(-1.0));  // z below its min by 1
-  CHECK(b.r[3] == Approx(-0.5));           // y above its max by 0.5
+  CHECK(b.r[3] == Approx(-0.5));          // y above its max by 0.5
 
   std::mt19937 rng(1);
   for (int trial = 0; trial < 5; ++trial)
@@ -196,7 +197,8 @@ TEST_CASE("distance: equality and one-sided, guarded at coincident points") {
   CHECK(z.dp.allFinite());
   std::mt19937 rng(3);
   for (int trial = 0; trial < 5; ++trial)
-    for (const Constraint* c : {&eq, &at_least, &at_most}) check_derivatives(k, *c, random_points(rng, 2), {});
+    for (const Constraint* c : {&eq, &at_least, &at_most})
+      check_derivatives(k, *c, random_points(rng, 2), {});
 }
 
 TEST_CASE("orientation: unit direction rows and the angle inequality") {
@@ -232,7 +234,8 @@ TEST_CASE("check() refuses shapes that do not suit the kind, naming the label") 
   };
   std::vector<Bad> bad;
   bad.push_back({make("position", Relation::Equal, 2, 0, {0, 0, 0}), "expects 1 point, got 2"});
-  bad.push_back({make("position", Relation::Equal, 1, 0, {0, 0}), "expects params [x y z] or [x y z mx my mz], got 2"});
+  bad.push_back(
+      {make("position", Relation::Equal, 1, 0, {0, 0}), "expects params [x y z] or [x y z mx my mz], got 2"});
   bad.push_back({make("position", Relation::Equal, 1, 0, {0, 0, 0, 0, 0, 0}), "the mask fixes no axis"});
   bad.push_back({make("position", Relation::Equal, 1, 0, {0, 0, 0, 2, 0, 0}), "mask entry must be 0 or 1"});
   bad.push_back({make("position", Relation::Equal, 1, 0, {0, kInf, 0}), "param 1 is infinite"});
@@ -241,7 +244,8 @@ TEST_CASE("check() refuses shapes that do not suit the kind, naming the label") 
   bad.push_back({make("parameter_range", Relation::Equal, 0, 1, {-kInf, kInf}), "both bounds are infinite"});
   bad.push_back({make("parameter_range", Relation::AtLeast, 0, 1, {0, 1}), "takes relation equal"});
   bad.push_back({make("region", Relation::Equal, 1, 0, {0, 0, 0, -1, 1, 1}), "min bound exceeds its max"});
-  bad.push_back({make("region", Relation::Equal, 1, 0, {-kInf, -kInf, -kInf, kInf, kInf, kInf}), "every bound is infinite"});
+  bad.push_back({make("region", Relation::Equal, 1, 0, {-kInf, -kInf, -kInf, kInf, kInf, kInf}),
+                 "every bound is infinite"});
   bad.push_back({make("same_place", Relation::Equal, 1, 0, {}), "expects 2 points, got 1"});
   bad.push_back({make("same_place", Relation::AtLeast, 2, 0, {}), "relation equal only"});
   bad.push_back({make("distance", Relation::Equal, 2, 0, {-1}), "distance is negative"});
@@ -355,7 +359,8 @@ TEST_CASE("kind table: built-ins, duplicates, lookups through extensions, unknow
 }
 
 TEST_CASE("evaluation on motions and violation summaries") {
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
   const motion::Motion& m = walk.motion;
   const std::span<const motion::Motion> chars(&m, 1);
   const PoseCache poses(chars);
@@ -424,8 +429,9 @@ TEST_CASE("evaluation on motions and violation summaries") {
   Constraint late = above;
   late.label = "late";
   late.samples = {{.frames = {m.frame_count()}}};
-  CHECK_THROWS_WITH(evaluate_sample(*kinds.find("region"), late, late.samples[0], poses, r),
-                    Catch::Contains("constraint 'late'") && Catch::Contains("frame " + std::to_string(m.frame_count())));
+  CHECK_THROWS_WITH(
+      evaluate_sample(*kinds.find("region"), late, late.samples[0], poses, r),
+      Catch::Contains("constraint 'late'") && Catch::Contains("frame " + std::to_string(m.frame_count())));
   late.points[0].character = 1;
   late.samples = {{.frames = {0}}};
   CHECK_THROWS_WITH(evaluate_sample(*kinds.find("region"), late, late.samples[0], poses, r),

@@ -6,13 +6,13 @@
 #include <filesystem>
 #include <sstream>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -22,7 +22,8 @@ using namespace kg::retarget;
 namespace {
 
 // Detected plants of the point on (joint, local), in time order.
-std::vector<motion::Footplant> plants_of(const motion::FootplantDetection& d, int joint, const Eigen::Vector3d& local) {
+std::vector<motion::Footplant> plants_of(const motion::FootplantDetection& d, int joint,
+                                         const Eigen::Vector3d& local) {
   std::vector<motion::Footplant> out;
   for (const motion::Footplant& p : d.plants) {
     const PointRef& r = d.points[static_cast<std::size_t>(p.point)].point;
@@ -54,7 +55,8 @@ void compare_with_synthesizer(const synth::Synthesis& s, const motion::Footplant
     for (const synth::FootPlant& p : s.plants)
       if (p.side == truth_first.side && p.point == truth_first.point) truth.push_back(&p);
     const std::vector<motion::Footplant> found = plants_of(d, truth_first.joint, truth_first.local);
-    INFO(truth_first.name() << ": synthesizer " << truth.size() << " plants, detected " << found.size() << "\n"
+    INFO(truth_first.name() << ": synthesizer " << truth.size() << " plants, detected " << found.size()
+                            << "\n"
                             << describe(d));
     REQUIRE(found.size() == truth.size());
     for (std::size_t i = 0; i < truth.size(); ++i) {
@@ -76,7 +78,8 @@ const std::string kData = KG_DATA_DIR;
 TEST_CASE("footplants of the synthesized walk match the synthesizer's plants") {
   for (double fps : {120.0, 30.0}) {
     INFO("fps " << fps);
-    const synth::Synthesis walk = synth::synthesize_walk({.steps = 6, .speed = 1.3, .stature = 1.75, .fps = fps});
+    const synth::Synthesis walk =
+        synth::synthesize_walk({.steps = 6, .speed = 1.3, .stature = 1.75, .fps = fps});
     const motion::FootplantDetection d = motion::detect_footplants(walk.motion, {});
     REQUIRE(d.points.size() == 4);
     CHECK(d.points[0].name == "LeftFoot");
@@ -91,7 +94,8 @@ TEST_CASE("footplants of the synthesized walk match the synthesizer's plants") {
 }
 
 TEST_CASE("footplant options: named points, given floor, thresholds, minimum duration, errors") {
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
   motion::FootplantOptions o;
   o.points = {"LeftToeBase/end", "RightFoot"};
   motion::FootplantDetection d = motion::detect_footplants(walk.motion, o);
@@ -134,15 +138,16 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
   // Trimming keeps each plant's core within trim_distance of its median position.
   o.trim_distance = 0.05;
   d = motion::detect_footplants(walk.motion, o);
-  for (const motion::Footplant& p : d.plants) CHECK(p.last_frame - p.first_frame + 1 < walk.motion.frame_count());
+  for (const motion::Footplant& p : d.plants)
+    CHECK(p.last_frame - p.first_frame + 1 < walk.motion.frame_count());
   o = {};
   o.min_duration_s = walk.motion.duration() + 1;
   CHECK(motion::detect_footplants(walk.motion, o).plants.empty());
 
   o = {};
   o.points = {"LeftToe"};
-  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("unknown joint 'LeftToe'") &&
-                                                          Catch::Contains("nearest: 'LeftToeBase'"));
+  CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o),
+                    Catch::Contains("unknown joint 'LeftToe'") && Catch::Contains("nearest: 'LeftToeBase'"));
   o.points = {"LeftFoot[0 0.1]"};
   CHECK_THROWS_WITH(motion::detect_footplants(walk.motion, o), Catch::Contains("expected Joint[x y z]"));
   o.points = {"LeftFoot/end"};
@@ -157,13 +162,15 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
 
   // A skeleton without recognisable feet.
   auto sk = std::make_shared<motion::Skeleton>();
-  sk->add_joint({.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Yposition}}, .end_sites = {}});
+  sk->add_joint(
+      {.name = "root", .parent = -1, .channels = {{motion::ChannelKind::Yposition}}, .end_sites = {}});
   motion::Motion blob{sk, motion::FrameMatrix::Zero(10, 1), 30.0, "blob"};
   CHECK_THROWS_WITH(motion::detect_footplants(blob, {}), Catch::Contains("no foot joint found"));
 }
 
 TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
   const motion::Motion& m = walk.motion;
   const motion::FootplantDetection d = motion::detect_footplants(m, {});
   REQUIRE(!d.plants.empty());
@@ -173,9 +180,11 @@ TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
   REQUIRE(fixed.constraints.size() == d.plants.size());
   CHECK_NOTHROW(check_constraints(fixed, kinds));
   CHECK(fixed.constraints[0].kind == "position");
-  CHECK(fixed.constraints[0].label == d.points[static_cast<std::size_t>(d.plants[0].point)].name + " plant 1");
+  CHECK(fixed.constraints[0].label ==
+        d.points[static_cast<std::size_t>(d.plants[0].point)].name + " plant 1");
   CHECK(fixed.constraints[0].params.size() == 6);
-  CHECK(static_cast<int>(fixed.constraints[0].samples.size()) == d.plants[0].last_frame - d.plants[0].first_frame + 1);
+  CHECK(static_cast<int>(fixed.constraints[0].samples.size()) ==
+        d.plants[0].last_frame - d.plants[0].first_frame + 1);
   // The source meets its own plants to within its skate (the synthesizer's are exact: < 1 cm
   // since a detected plant may take in a frame of the roll).
   const std::span<const motion::Motion> chars(&m, 1);
@@ -229,7 +238,8 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
     auto scale = [&](const PointRef& p, int f) {
       return (1.0 - 0.4 * f / (frames - 1.0)) * (p.local.isZero() ? 1.0 : 0.9);
     };
-    const ConstraintSet fixed = footplant_constraints(d, frames, {.flavour = PlantFlavour::Fixed, .height_scale = scale});
+    const ConstraintSet fixed =
+        footplant_constraints(d, frames, {.flavour = PlantFlavour::Fixed, .height_scale = scale});
     CHECK_NOTHROW(check_constraints(fixed, kinds));
     for (const Constraint& c : fixed.constraints) {
       const motion::Footplant& p = d.plants[static_cast<std::size_t>(&c - fixed.constraints.data())];
@@ -243,15 +253,17 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
       }
     }
     // A constant scale gives one set of params per plant.
-    const ConstraintSet uniform =
-        footplant_constraints(d, frames, {.flavour = PlantFlavour::Floor, .height_scale = [](const PointRef&, int) { return 0.6; }});
+    const ConstraintSet uniform = footplant_constraints(
+        d, frames,
+        {.flavour = PlantFlavour::Floor, .height_scale = [](const PointRef&, int) { return 0.6; }});
     for (const Constraint& c : uniform.constraints)
       if (c.kind == "position")
         for (const Sample& s : c.samples) CHECK(s.params.empty());
   }
 
   SECTION("an estimated floor never lifts a point above its source height; a given floor holds everywhere") {
-    const ConstraintSet set = footplant_constraints(d, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
+    const ConstraintSet set =
+        footplant_constraints(d, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
     const std::span<const motion::Motion> chars(&m, 1);
     const ViolationSummary v = summarize_violations(set, kinds, chars);
     CHECK(v.find("region")->worst == 0.0);
@@ -272,7 +284,8 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
     given.floor = d.floor;
     const motion::FootplantDetection dg = motion::detect_footplants(m, given);
     CHECK(!dg.floor_estimated);
-    const ConstraintSet level = footplant_constraints(dg, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
+    const ConstraintSet level =
+        footplant_constraints(dg, frames, {.flavour = PlantFlavour::Floor, .above_floor = true});
     for (const Constraint& c : level.constraints)
       if (c.kind == "region") {
         CHECK(c.params[1] == d.floor);
@@ -282,15 +295,18 @@ TEST_CASE("footplant constraints on a target: heights above the floor scale, the
   }
 
   SECTION("a height scale that is not positive is refused") {
-    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return -1.0; }}),
-                      Catch::Contains("expected > 0"));
-    CHECK_THROWS_WITH(footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return NAN; }}),
-                      Catch::Contains("expected > 0"));
+    CHECK_THROWS_WITH(
+        footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return -1.0; }}),
+        Catch::Contains("expected > 0"));
+    CHECK_THROWS_WITH(
+        footplant_constraints(d, frames, {.height_scale = [](const PointRef&, int) { return NAN; }}),
+        Catch::Contains("expected > 0"));
   }
 }
 
 TEST_CASE("height_factor: a foot point rests on the segments below it") {
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 2, .speed = 1.2, .stature = 1.75, .fps = 30});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 2, .speed = 1.2, .stature = 1.75, .fps = 30});
   const motion::Skeleton& s = *walk.motion.skeleton;
   // Thighs and shanks (the offsets of LeftLeg and LeftFoot) at 0.5, feet and toes at 0.8, the rest 0.6.
   Eigen::VectorXd factors = Eigen::VectorXd::Constant(s.joint_count(), 0.6);
@@ -347,11 +363,13 @@ TEST_CASE("footplants on real walks: plausible plant counts per foot") {
 
 TEST_CASE("retarget.footplants node") {
   const graph::Registry registry = test::registry_of(retarget_constraint_node_types());
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
-  test::NodeContext ctx = test::run_node(
-      registry, "retarget.footplants",
-      test::params_for(registry, "retarget.footplants", {{"flavour", std::string("floor")}, {"above_floor", true}}),
-      {{"motion", graph::Value::make(walk.motion)}});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  test::NodeContext ctx =
+      test::run_node(registry, "retarget.footplants",
+                     test::params_for(registry, "retarget.footplants",
+                                      {{"flavour", std::string("floor")}, {"above_floor", true}}),
+                     {{"motion", graph::Value::make(walk.motion)}});
   const ConstraintSet& set = ctx.outputs.at("constraints").get<ConstraintSet>();
   CHECK(!set.constraints.empty());
   CHECK(std::get<std::int64_t>(ctx.figures.at("plants.LeftToeBase/end")) >= 2);
@@ -361,18 +379,19 @@ TEST_CASE("retarget.footplants node") {
 
   // With a target connected, plant heights are the target's: a 60% figure's toe tip rests lower.
   const ConstraintSet& source_set = set;
-  test::NodeContext small = test::run_node(
-      registry, "retarget.footplants", test::params_for(registry, "retarget.footplants", {}),
-      {{"motion", graph::Value::make(walk.motion)},
-       {"target", graph::Value::make(uniform_target(walk.motion.skeleton, 0.6))}});
+  test::NodeContext small =
+      test::run_node(registry, "retarget.footplants", test::params_for(registry, "retarget.footplants", {}),
+                     {{"motion", graph::Value::make(walk.motion)},
+                      {"target", graph::Value::make(uniform_target(walk.motion.skeleton, 0.6))}});
   const ConstraintSet& small_set = small.outputs.at("constraints").get<ConstraintSet>();
   CHECK(std::get<double>(small.figures.at("height_scale.LeftFoot")) == Approx(0.6));
   CHECK(std::get<double>(small.figures.at("height_scale.LeftToeBase/end")) == Approx(0.6));
   REQUIRE(!small_set.constraints.empty());
   const double floor = std::get<double>(small.figures.at("floor_m"));
   for (const Constraint& c : small_set.constraints) {
-    const auto original = std::find_if(source_set.constraints.begin(), source_set.constraints.end(),
-                                       [&](const Constraint& o) { return o.label == c.label && o.kind == "position"; });
+    const auto original =
+        std::find_if(source_set.constraints.begin(), source_set.constraints.end(),
+                     [&](const Constraint& o) { return o.label == c.label && o.kind == "position"; });
     if (c.kind != "position" || original == source_set.constraints.end()) continue;
     CHECK(c.params[1] - floor == Approx(0.6 * (original->params[1] - floor)).margin(1e-12));
   }
@@ -385,8 +404,9 @@ TEST_CASE("retarget.footplants node") {
                        {{"motion", graph::Value::make(walk.motion)}});
   CHECK(ctx.figures.count("plants.LeftFoot") == 0);
   CHECK(std::get<double>(ctx.figures.at("floor_m")) == 0.0);
-  CHECK_THROWS_WITH(test::run_node(registry, "retarget.footplants",
-                                   test::params_for(registry, "retarget.footplants", {{"floor", std::string("low")}}),
-                                   {{"motion", graph::Value::make(walk.motion)}}),
-                    Catch::Contains("floor 'low'"));
+  CHECK_THROWS_WITH(
+      test::run_node(registry, "retarget.footplants",
+                     test::params_for(registry, "retarget.footplants", {{"floor", std::string("low")}}),
+                     {{"motion", graph::Value::make(walk.motion)}}),
+      Catch::Contains("floor 'low'"));
 }

@@ -5,13 +5,13 @@
 
 #include <limits>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/holds.hpp"
 #include "kg/retarget/metrics.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/synth/synthesize.hpp"
@@ -24,10 +24,12 @@ namespace {
 // The same walk, the second walker `dx` metres to the first one's left (world +X) and, from
 // frame `apart_from` on, drifting a further 1 m/s away.
 std::pair<motion::Motion, motion::Motion> side_by_side(double dx, int apart_from = 1 << 30) {
-  const synth::Synthesis walk = synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
+  const synth::Synthesis walk =
+      synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
   motion::Motion a = walk.motion, b = walk.motion;
   b.name = "walk2";
-  for (int f = 0; f < b.frame_count(); ++f) b.values(f, 0) += dx + (f > apart_from ? (f - apart_from) / 30.0 : 0.0);
+  for (int f = 0; f < b.frame_count(); ++f)
+    b.values(f, 0) += dx + (f > apart_from ? (f - apart_from) / 30.0 : 0.0);
   return {a, b};
 }
 
@@ -37,8 +39,11 @@ TEST_CASE("holds: pairs of points that stay close, kept at the source distance")
   // B walks 0.5 m to A's left, so A's left hand and B's right hand are the close pair (their
   // distance swings with the arms, within 0.45 m); both right hands stay 0.5 m apart.
   const auto [a, b] = side_by_side(0.5, 40);
-  const HoldDetection d = detect_holds(
-      a, b, {.points_a = {"LeftHand", "RightHand"}, .points_b = {"RightHand"}, .max_distance = 0.45, .hysteresis = 1.0});
+  const HoldDetection d = detect_holds(a, b,
+                                       {.points_a = {"LeftHand", "RightHand"},
+                                        .points_b = {"RightHand"},
+                                        .max_distance = 0.45,
+                                        .hysteresis = 1.0});
   INFO("closest " << d.closest);
   REQUIRE(d.holds.size() == 1);
   const HoldSpan& h = d.holds.front();
@@ -46,7 +51,7 @@ TEST_CASE("holds: pairs of points that stay close, kept at the source distance")
   CHECK(d.points_b[static_cast<std::size_t>(h.point_b)].name == "RightHand");
   CHECK(d.points_b[static_cast<std::size_t>(h.point_b)].point.character == 1);
   CHECK(h.first_frame == 0);
-  CHECK(h.last_frame > 40);  // B starts drifting away at frame 40
+  CHECK(h.last_frame > 40);                   // B starts drifting away at frame 40
   CHECK(h.last_frame < a.frame_count() - 1);  // they walked apart
 
   const ConstraintSet set = hold_constraints(d);
@@ -72,17 +77,21 @@ TEST_CASE("holds: bad input") {
   const auto [a, b] = side_by_side(0.5);
   CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHnd"}, .points_b = {"LeftHand"}}),
                     Catch::Contains("holds: unknown joint 'LeftHnd'") && Catch::Contains("LeftHand"));
-  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {}, .points_b = {"LeftHand"}}), Catch::Contains("at least one point"));
-  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .max_distance = 0}),
-                    Catch::Contains("max_distance"));
+  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {}, .points_b = {"LeftHand"}}),
+                    Catch::Contains("at least one point"));
+  CHECK_THROWS_WITH(
+      detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .max_distance = 0}),
+      Catch::Contains("max_distance"));
   motion::Motion shorter = b;
   shorter.values.conservativeResize(b.frame_count() - 5, Eigen::NoChange);
   CHECK_THROWS_WITH(detect_holds(a, shorter, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}}),
                     Catch::Contains("differ in length or rate"));
-  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .hysteresis = 0.5}),
-                    Catch::Contains("hysteresis"));
-  CHECK_THROWS_WITH(detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .min_duration_s = -1}),
-                    Catch::Contains("min_duration_s"));
+  CHECK_THROWS_WITH(
+      detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .hysteresis = 0.5}),
+      Catch::Contains("hysteresis"));
+  CHECK_THROWS_WITH(
+      detect_holds(a, b, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}, .min_duration_s = -1}),
+      Catch::Contains("min_duration_s"));
   motion::Motion broken = b;
   broken.values(3, 5) = std::numeric_limits<double>::quiet_NaN();
   CHECK_THROWS(detect_holds(a, broken, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}}));
@@ -91,7 +100,8 @@ TEST_CASE("holds: bad input") {
 TEST_CASE("holds: hysteresis keeps a hold through a brief parting; short holds are dropped") {
   // The close pair's distance swings between about 0 and 0.37 m with the arms.
   const auto [a, b] = side_by_side(0.5);
-  const HoldOptions tight{.points_a = {"LeftHand"}, .points_b = {"RightHand"}, .max_distance = 0.3, .hysteresis = 1.0};
+  const HoldOptions tight{
+      .points_a = {"LeftHand"}, .points_b = {"RightHand"}, .max_distance = 0.3, .hysteresis = 1.0};
   const HoldDetection parted = detect_holds(a, b, tight);
   REQUIRE(parted.holds.size() >= 2);
   HoldOptions loose = tight;
@@ -111,14 +121,17 @@ TEST_CASE("two walkers in one solve: one shrinks, the hand-hold stays, the other
   const graph::Registry registry = test::registry_of(retarget_constraint_node_types());
 
   // retarget.holds between them, retarget.constraints reading a file naming the second walker.
-  test::NodeContext holds = test::run_node(
-      registry, "retarget.holds",
-      test::params_for(registry, "retarget.holds",
-                       {{"points", std::string("LeftHand")}, {"points2", std::string("RightHand")}, {"max_distance", 0.5}}),
-      {{"motion", graph::Value::make(a)}, {"motion2", graph::Value::make(b)}});
+  test::NodeContext holds =
+      test::run_node(registry, "retarget.holds",
+                     test::params_for(registry, "retarget.holds",
+                                      {{"points", std::string("LeftHand")},
+                                       {"points2", std::string("RightHand")},
+                                       {"max_distance", 0.5}}),
+                     {{"motion", graph::Value::make(a)}, {"motion2", graph::Value::make(b)}});
   CHECK(std::get<std::int64_t>(holds.figures.at("holds")) == 1);
   const ConstraintSet hold_set = holds.outputs.at("constraints").get<ConstraintSet>();
-  const ConstraintSet second_floor = read_constraints_string(R"(version: 1
+  const ConstraintSet second_floor =
+      read_constraints_string(R"(version: 1
 constraints:
   - kind: region
     label: "walker 2 toe above floor"
@@ -126,7 +139,7 @@ constraints:
     params: [-.inf, -0.001, -.inf, .inf, .inf, .inf]
     frames: [0, 10]
 )",
-                                                             "walker2.yaml", std::vector<motion::Motion>{a, b});
+                              "walker2.yaml", std::vector<motion::Motion>{a, b});
   CHECK(second_floor.constraints.front().points.front().character == 1);
 
   // Walker 1 shrinks to 90%; walker 2 may move only above the hips.
@@ -157,10 +170,12 @@ constraints:
   REQUIRE(r.converged());
   CHECK(summarize_violations(set, kinds, r.motions).worst() < 1e-3);
   for (int c = 0; c < b.skeleton->channel_count(); ++c)
-    if (frozen[static_cast<std::size_t>(c)]) CHECK((r.motions[1].values.col(c) - b.values.col(c)).cwiseAbs().maxCoeff() == 0.0);
+    if (frozen[static_cast<std::size_t>(c)])
+      CHECK((r.motions[1].values.col(c) - b.values.col(c)).cwiseAbs().maxCoeff() == 0.0);
 
   // The metrics measure constraints across characters given the second result, and refuse them without.
-  const RetargetMetrics m = compute_metrics({.result = &r.motions[0], .result2 = &r.motions[1], .constraints = &set, .kinds = &kinds});
+  const RetargetMetrics m = compute_metrics(
+      {.result = &r.motions[0], .result2 = &r.motions[1], .constraints = &set, .kinds = &kinds});
   CHECK(m.worst_violation_metres < 1e-3);
   CHECK_THROWS_WITH(compute_metrics({.result = &r.motions[0], .constraints = &set, .kinds = &kinds}),
                     Catch::Contains("second character"));

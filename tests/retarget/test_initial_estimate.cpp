@@ -6,7 +6,6 @@
 #include <filesystem>
 #include <limits>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -14,6 +13,7 @@
 #include "kg/motion/resample.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/initial_estimate.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using kg::retarget::Constraint;
@@ -272,7 +272,8 @@ TEST_CASE("a real walk on another subject's skeleton: planted feet pulled back o
   const auto& s = *m.skeleton;
   // Target: subject 7's proportions, then 0.6 of that (a child-sized subject 7).
   const Target seven = kg::retarget::load_target(m.skeleton, (dir / "07.asf").string()).target;
-  const auto small = kg::retarget::scaled_skeleton(*seven.skeleton, Eigen::VectorXd::Constant(s.joint_count(), 0.6));
+  const auto small =
+      kg::retarget::scaled_skeleton(*seven.skeleton, Eigen::VectorXd::Constant(s.joint_count(), 0.6));
   const Target t = kg::retarget::skeleton_target(m.skeleton, *small, "0.6 x 07.asf");
   // Planted-looking frames: a foot's ankle within 2 cm of its lowest height in the clip.
   const Eigen::MatrixXd world = kg::motion::joint_world_positions(m);

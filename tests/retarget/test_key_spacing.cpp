@@ -8,12 +8,12 @@
 #include <functional>
 #include <numbers>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/resample.hpp"
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -190,8 +190,8 @@ TEST_CASE("real walks at 30 Hz: the pyramid's choice", "[retarget][keys][data]")
     CHECK(f[2] > 0.1);
     const auto k05 = kg::retarget::choose_key_spacing(m, {.threshold = 0.05});
     const auto k20 = kg::retarget::choose_key_spacing(m, {.threshold = 0.2});
-    WARN(trial << ": threshold 0.05 -> " << k05.frames_per_key.front() << ", 0.1 -> " << keys.frames_per_key.front()
-               << ", 0.2 -> " << k20.frames_per_key.front());
+    WARN(trial << ": threshold 0.05 -> " << k05.frames_per_key.front() << ", 0.1 -> "
+               << keys.frames_per_key.front() << ", 0.2 -> " << k20.frames_per_key.front());
     CHECK((k05.frames_per_key.front() == 2 || k05.frames_per_key.front() == 4));
     CHECK(k20.frames_per_key.front() == 8);
   }

@@ -12,14 +12,14 @@
 
 #include <catch2/catch.hpp>
 
-#include "kg/motion/filters.hpp"
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
+#include "kg/motion/filters.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/retarget/metrics.hpp"
+#include "kg/retarget/nodes.hpp"
 
 using Catch::Matchers::Contains;
 using namespace kg;
@@ -271,13 +271,13 @@ TEST_CASE("retarget.metrics node: figures and the JSON report io.write_report wr
   test::TempDir dir;
   const std::string path = (dir.path() / "out" / "metrics.json").string();
   KeySpacing keys{std::vector<int>(6, 2), "by hand"};
-  const test::NodeContext ctx = test::run_node(
-      registry, "retarget.metrics", test::params_for(registry, "retarget.metrics"),
-      {{"motion", graph::Value::make(result)},
-       {"constraints", graph::Value::make(set)},
-       {"source", graph::Value::make(source)},
-       {"keys", graph::Value::make(keys)},
-       {"solve_seconds", graph::Value::make(0.25)}});
+  const test::NodeContext ctx =
+      test::run_node(registry, "retarget.metrics", test::params_for(registry, "retarget.metrics"),
+                     {{"motion", graph::Value::make(result)},
+                      {"constraints", graph::Value::make(set)},
+                      {"source", graph::Value::make(source)},
+                      {"keys", graph::Value::make(keys)},
+                      {"solve_seconds", graph::Value::make(0.25)}});
   CHECK(std::get<double>(ctx.figures.at("worst_position_cm")) > 0);
   CHECK(std::get<double>(ctx.figures.at("jerk_rotation_increase")) > 0);
   CHECK(std::get<double>(ctx.figures.at("solve_seconds")) == 0.25);
@@ -295,9 +295,9 @@ TEST_CASE("retarget.metrics node: figures and the JSON report io.write_report wr
   CHECK_THAT(text.str(), Contains("\"version\": 1") && Contains("\"reference\": \"source\"") &&
                              Contains("\"cutoff_hz_min\": 7.5") && Contains("\"solve_seconds\": 0.25"));
   // No path: nothing written, and said so.
-  const test::NodeContext none = test::run_node(registry, "io.write_report",
-                                                test::params_for(registry, "io.write_report"),
-                                                {{"report", ctx.outputs.at("report")}});
+  const test::NodeContext none =
+      test::run_node(registry, "io.write_report", test::params_for(registry, "io.write_report"),
+                     {{"report", ctx.outputs.at("report")}});
   CHECK_FALSE(std::get<bool>(none.figures.at("written")));
   CHECK(none.logged("nothing written"));
 

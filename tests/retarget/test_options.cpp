@@ -6,8 +6,8 @@
 
 #include <cmath>
 #include <functional>
-#include <map>
 #include <limits>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -185,8 +185,8 @@ TEST_CASE("retarget node factories refuse a bad setting when the graph loads") {
     const graph::NodeType& type = test::node_type(registry, c.type);
     CHECK_THROWS_WITH(type.create(test::params_for(type.spec, c.given)), Contains(c.message));
   }
-  for (const char* type : {"retarget.spacetime", "retarget.per_frame_ik", "retarget.holds", "retarget.footplants",
-                           "retarget.key_spacing", "retarget.initial_estimate"}) {
+  for (const char* type : {"retarget.spacetime", "retarget.per_frame_ik", "retarget.holds",
+                           "retarget.footplants", "retarget.key_spacing", "retarget.initial_estimate"}) {
     INFO(type << ": its defaults load");
     const graph::NodeType& t = test::node_type(registry, type);
     CHECK_NOTHROW(t.create(test::params_for(t.spec)));

@@ -9,7 +9,6 @@
 
 #include <catch2/catch.hpp>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -18,6 +17,7 @@
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
 #include "kg/retarget/metrics.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 #include "kg/synth/synthesize.hpp"
 

@@ -8,8 +8,8 @@
 #include <limits>
 #include <random>
 
-#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/motion/kinematics.hpp"
+#include "kg/numerics/banded_cholesky.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/synth/synthesize.hpp"

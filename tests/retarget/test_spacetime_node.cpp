@@ -4,12 +4,12 @@
 
 #include <cmath>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -42,7 +42,9 @@ Walk60 walk60() {
   w.m1.values.leftCols(3) *= s;
   for (const synth::FootPlant& p : w.walk.plants) {
     const Eigen::Vector3d at = p.world * s;
-    Constraint c{.kind = "position", .label = p.name() + " plant", .points = {{0, p.joint, p.local * s}},
+    Constraint c{.kind = "position",
+                 .label = p.name() + " plant",
+                 .points = {{0, p.joint, p.local * s}},
                  .params = {at.x(), at.y(), at.z()}};
     for (int f = p.first_frame; f <= p.last_frame; ++f) c.samples.push_back({{f}});
     w.plants.constraints.push_back(c);
@@ -70,7 +72,9 @@ TEST_CASE("retarget.spacetime node: solves, reports, honours a freeze mask", "[s
   CHECK_FALSE(type.spec.find_input("motion2")->required);
 
   test::NodeContext ctx = test::run_node(
-      type, test::params_for(type.spec, {{"freeze", std::string("(Left|Right)(Shoulder|Arm|ForeArm|Hand)|Neck|Head")}}),
+      type,
+      test::params_for(type.spec,
+                       {{"freeze", std::string("(Left|Right)(Shoulder|Arm|ForeArm|Hand)|Neck|Head")}}),
       {{"motion", graph::Value::make(w.m1)}, {"constraints", graph::Value::make(w.plants)}});
   INFO(std::get<std::string>(ctx.figures.at("message")));
   CHECK(std::get<bool>(ctx.figures.at("converged")));
@@ -107,11 +111,11 @@ TEST_CASE("retarget.spacetime node: key spacing input, contradictions reported, 
     twice.params[0] += 0.5;
     set.constraints.push_back(twice);
     KeySpacing keys{std::vector<int>(static_cast<std::size_t>(channels), 8), "by hand"};
-    test::NodeContext ctx =
-        test::run_node(type, test::params_for(type.spec, {{"max_iterations", std::int64_t{10}}, {"densify", false}}),
-                       {{"motion", graph::Value::make(w.m1)},
-                        {"constraints", graph::Value::make(set)},
-                        {"keys", graph::Value::make(keys)}});
+    test::NodeContext ctx = test::run_node(
+        type, test::params_for(type.spec, {{"max_iterations", std::int64_t{10}}, {"densify", false}}),
+        {{"motion", graph::Value::make(w.m1)},
+         {"constraints", graph::Value::make(set)},
+         {"keys", graph::Value::make(keys)}});
     CHECK_FALSE(std::get<bool>(ctx.figures.at("converged")));
     CHECK(std::get<std::int64_t>(ctx.figures.at("finest_keys")) == 8);
     CHECK(std::get<double>(ctx.figures.at("worst_violation_mm")) > 100);
@@ -130,9 +134,10 @@ TEST_CASE("retarget.spacetime node: key spacing input, contradictions reported, 
   SECTION("a second character's constraints without motion2") {
     ConstraintSet set = w.plants;
     set.constraints[0].points[0].character = 1;
-    CHECK_THROWS_WITH(test::run_node(type, test::params_for(type.spec),
-                                     {{"motion", graph::Value::make(w.m1)}, {"constraints", graph::Value::make(set)}}),
-                      Catch::Contains("motion2"));
+    CHECK_THROWS_WITH(
+        test::run_node(type, test::params_for(type.spec),
+                       {{"motion", graph::Value::make(w.m1)}, {"constraints", graph::Value::make(set)}}),
+        Catch::Contains("motion2"));
   }
   SECTION("freeze patterns that are invalid or match nothing") {
     CHECK_THROWS_WITH(type.create(test::params_for(type.spec, {{"freeze", std::string("(Left")}})),
@@ -146,9 +151,10 @@ TEST_CASE("retarget.spacetime node: key spacing input, contradictions reported, 
   SECTION("an unknown constraint kind is named") {
     ConstraintSet set = w.plants;
     set.constraints[0].kind = "levitate";
-    CHECK_THROWS_WITH(test::run_node(type, test::params_for(type.spec),
-                                     {{"motion", graph::Value::make(w.m1)}, {"constraints", graph::Value::make(set)}}),
-                      Catch::Contains("levitate"));
+    CHECK_THROWS_WITH(
+        test::run_node(type, test::params_for(type.spec),
+                       {{"motion", graph::Value::make(w.m1)}, {"constraints", graph::Value::make(set)}}),
+        Catch::Contains("levitate"));
   }
 }
 
@@ -160,14 +166,19 @@ TEST_CASE("retarget.spacetime node: two characters, hand-hold distance, second o
   motion::Motion m2 = w.m1;
   m2.values.col(0).array() += 0.5;
   ConstraintSet set = w.plants;
-  Constraint hold{.kind = "distance", .label = "hand-hold",
-                  .points = {{0, w.walk.figure.hand[synth::kLeft], {0, 0, 0}}, {1, w.walk.figure.hand[synth::kRight], {0, 0, 0}}},
+  Constraint hold{.kind = "distance",
+                  .label = "hand-hold",
+                  .points = {{0, w.walk.figure.hand[synth::kLeft], {0, 0, 0}},
+                             {1, w.walk.figure.hand[synth::kRight], {0, 0, 0}}},
                   .params = {0.45}};
   for (int f = 0; f < w.m1.frame_count(); ++f) hold.samples.push_back({{f, f}});
   set.constraints.push_back(hold);
   test::NodeContext ctx = test::run_node(
-      type, test::params_for(type.spec, {{"freeze2", std::string("Hips|(Left|Right)(UpLeg|Leg|Foot|ToeBase)")}}),
-      {{"motion", graph::Value::make(w.m1)}, {"motion2", graph::Value::make(m2)}, {"constraints", graph::Value::make(set)}});
+      type,
+      test::params_for(type.spec, {{"freeze2", std::string("Hips|(Left|Right)(UpLeg|Leg|Foot|ToeBase)")}}),
+      {{"motion", graph::Value::make(w.m1)},
+       {"motion2", graph::Value::make(m2)},
+       {"constraints", graph::Value::make(set)}});
   INFO(std::get<std::string>(ctx.figures.at("message")));
   CHECK(std::get<bool>(ctx.figures.at("converged")));
   REQUIRE(ctx.outputs.count("motion2") == 1);

@@ -6,14 +6,14 @@
 #include <filesystem>
 #include <string>
 
-#include "kg/retarget/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/base/error.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
+#include "kg/retarget/nodes.hpp"
 #include "kg/retarget/target.hpp"
 #include "kg/synth/figure.hpp"
 #include "kg/synth/synthesize.hpp"
@@ -314,8 +314,10 @@ TEST_CASE("retarget.target node: uniform scale, a file, and the scale it ignores
                                     kg::test::params_for(registry, "retarget.target", {{"scale", -1.0}})));
 }
 
-TEST_CASE("constraints on a morphing target: each sample's points scaled at its frame's time", "[retarget][target]") {
-  const kg::synth::Synthesis walk = kg::synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
+TEST_CASE("constraints on a morphing target: each sample's points scaled at its frame's time",
+          "[retarget][target]") {
+  const kg::synth::Synthesis walk =
+      kg::synth::synthesize_walk({.steps = 3, .speed = 1.2, .stature = 1.75, .fps = 30});
   const auto& s = *walk.motion.skeleton;
   const int toe = joint(s, "LeftToeBase");
   const Eigen::Vector3d tip = s.joint(toe).end_sites.front();
@@ -323,8 +325,8 @@ TEST_CASE("constraints on a morphing target: each sample's points scaled at its 
   const Target morph = kg::retarget::morph_target(
       walk.motion.skeleton, {0.0, 2.0},
       {Eigen::VectorXd::Ones(s.joint_count()), Eigen::VectorXd::Constant(s.joint_count(), 0.5)});
-  kg::retarget::Constraint plant{.kind = "position", .label = "toe tip", .points = {{0, toe, tip}},
-                                 .params = {0, 0, 0, 0, 1, 0}};
+  kg::retarget::Constraint plant{
+      .kind = "position", .label = "toe tip", .points = {{0, toe, tip}}, .params = {0, 0, 0, 0, 1, 0}};
   for (int f : {0, 30, 60, 75}) plant.samples.push_back({.frames = {f}});
   kg::retarget::ConstraintSet set;
   set.constraints.push_back(plant);
@@ -345,17 +347,20 @@ TEST_CASE("constraints on a morphing target: each sample's points scaled at its 
   // Per-sample offsets must match the points, for built-in kinds and the solver alike.
   kg::retarget::ConstraintSet bad = moved;
   bad.constraints.front().samples[1].locals.push_back(tip);
-  CHECK_THAT(thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
-             Catch::Contains("a sample gives 2 point offsets for 1 points"));
+  CHECK_THAT(
+      thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
+      Catch::Contains("a sample gives 2 point offsets for 1 points"));
   bad.constraints.front().samples[1].locals = {Eigen::Vector3d(NAN, 0, 0)};
-  CHECK_THAT(thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
-             Catch::Contains("point offset is not finite"));
+  CHECK_THAT(
+      thrown([&] { kg::retarget::check_constraints(bad, kg::retarget::ConstraintKindTable::builtin()); }),
+      Catch::Contains("point offset is not finite"));
 
   // A constant target scales the constraint's points and leaves samples alone; the other
   // character's points stay.
   set.constraints.front().points.push_back({1, toe, tip});
   for (auto& sm : set.constraints.front().samples) sm.frames.push_back(sm.frames.front());
-  const kg::retarget::ConstraintSet small = kg::retarget::constraints_on_target(set, kg::retarget::uniform_target(walk.motion.skeleton, 0.6));
+  const kg::retarget::ConstraintSet small =
+      kg::retarget::constraints_on_target(set, kg::retarget::uniform_target(walk.motion.skeleton, 0.6));
   CHECK((small.constraints.front().points[0].local - 0.6 * tip).norm() < 1e-12);
   CHECK((small.constraints.front().points[1].local - tip).norm() < 1e-12);
   CHECK(small.constraints.front().samples.front().locals.empty());
@@ -363,9 +368,10 @@ TEST_CASE("constraints on a morphing target: each sample's points scaled at its 
   // The node needs the clip's frame rate for a morph.
   const kg::graph::Registry registry = kg::test::registry_of(kg::retarget_target_node_types());
   CHECK_THAT(thrown([&] {
-               kg::test::run_node(registry, "retarget.constraints_on_target",
-                                  kg::test::params_for(registry, "retarget.constraints_on_target", {}),
-                                  {{"constraints", kg::graph::Value::make(set)}, {"target", kg::graph::Value::make(morph)}});
+               kg::test::run_node(
+                   registry, "retarget.constraints_on_target",
+                   kg::test::params_for(registry, "retarget.constraints_on_target", {}),
+                   {{"constraints", kg::graph::Value::make(set)}, {"target", kg::graph::Value::make(morph)}});
              }),
              Catch::Contains("connect the clip to 'motion'"));
 }

@@ -13,17 +13,17 @@
 
 #include <Eigen/Eigenvalues>
 
-#include "kg/retime/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/base/error.hpp"
+#include "kg/body/body_build.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/yaml_io.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
-#include "kg/body/body_build.hpp"
+#include "kg/retime/nodes.hpp"
 #include "kg/synth/figure.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -763,8 +763,7 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
   CHECK_THAT(
       thrown([&] {
         body::build_body_model(
-            tiny,
-            body::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {mass: 1}\n", "z.yaml").spec);
+            tiny, body::parse_body_yaml("version: 1\nsegments:\n  LeftHandEnd: {mass: 1}\n", "z.yaml").spec);
       }),
       Catch::Contains("z.yaml:3:3: segments 'LeftHandEnd': joint 'LeftHandEnd' has no bone, so no shape"));
   CHECK_THAT(

@@ -6,16 +6,16 @@
 #include <filesystem>
 #include <sstream>
 
-#include "kg/retime/nodes.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/base/error.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/resample.hpp"
 #include "kg/retime/contacts.hpp"
+#include "kg/retime/nodes.hpp"
 
 using namespace kg;
 using namespace kg::retime;

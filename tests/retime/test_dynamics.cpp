@@ -40,9 +40,9 @@
 #include "kg/retime/path.hpp"
 
 using namespace kg;
+using body::BodyModel;
 using Catch::Matchers::Contains;
 using motion::ChannelKind;
-using body::BodyModel;
 
 namespace {
 
@@ -657,8 +657,7 @@ TEST_CASE("inverse dynamics refuses bad input with a message") {
   const Eigen::Vector3d g(0, -9.81, 0);
   CHECK_THROWS_WITH(body::inverse_dynamics(body, shorter, q, q, g, {}, ws, tau),
                     Contains("q has " + std::to_string(n - 1) + " values"));
-  CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, shorter, g, {}, ws, tau),
-                    Contains("q acceleration"));
+  CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, shorter, g, {}, ws, tau), Contains("q acceleration"));
   const std::vector<body::ExternalForce> bad_joint = {{.joint = 9}};
   CHECK_THROWS_WITH(body::inverse_dynamics(body, q, q, q, g, bad_joint, ws, tau),
                     Contains("acts on joint 9") && Contains("expected 0..3"));

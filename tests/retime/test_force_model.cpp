@@ -329,7 +329,8 @@ TEST_CASE("The closest hull point, with and without hints", "[force_model]") {
     std::sort(angles.begin(), angles.end());
     for (double a : angles) h.vertices.emplace_back(15 * std::cos(a), 1 + 0.3 * std::sin(a));
     const std::size_t j = static_cast<std::size_t>(unit(rng) * n);
-    h.centre = i % 2 ? h.vertices[j] : Eigen::Vector2d(0.5 * (h.vertices[j] + h.vertices[(j + 1) % h.vertices.size()]));
+    h.centre = i % 2 ? h.vertices[j]
+                     : Eigen::Vector2d(0.5 * (h.vertices[j] + h.vertices[(j + 1) % h.vertices.size()]));
     h.lambda.assign(h.vertices.size(), Eigen::VectorXd());
     h.centre_lambda = Eigen::VectorXd();
     build_fan(h);

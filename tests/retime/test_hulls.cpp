@@ -360,7 +360,8 @@ TEST_CASE("build_hulls runs a clip frame by frame and counts the statuses", "[hu
     CHECK_THROWS_WITH(build_hulls(pm.body, c, std::span(t).first(2), {}),
                       Catch::Contains("3 contact frames but 2 frames"));
     CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.tolerance = 0}), Catch::Contains("tolerance"));
-    CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.pddot_max = -1}), Catch::Contains("HullOptions.pddot_max = -1.0"));
+    CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.pddot_max = -1}),
+                      Catch::Contains("HullOptions.pddot_max = -1.0"));
     CHECK_THROWS_WITH(build_hulls(pm.body, c, t, {.initial_directions = 2}),
                       Catch::Contains("initial_directions"));
     BodyModel short_limits = pm.body;

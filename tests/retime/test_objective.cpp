@@ -69,9 +69,11 @@ struct Mixed {
 Mixed mixed(int frames, unsigned seed) {
   using kg::motion::ChannelKind;
   Mixed c;
-  c.skeleton.add_joint({.name = "root",
-                        .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition}}});
-  c.skeleton.add_joint({.name = "arm", .parent = 0, .channels = {{ChannelKind::Xrotation}, {ChannelKind::Zrotation}}});
+  c.skeleton.add_joint(
+      {.name = "root",
+       .channels = {{ChannelKind::Xposition}, {ChannelKind::Yposition}, {ChannelKind::Zposition}}});
+  c.skeleton.add_joint(
+      {.name = "arm", .parent = 0, .channels = {{ChannelKind::Xrotation}, {ChannelKind::Zrotation}}});
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> unit(0, 1), signed_unit(-1, 1);
   const int channels = 5, columns = 4;
@@ -88,23 +90,27 @@ Mixed mixed(int frames, unsigned seed) {
   for (int f = 0; f < frames; ++f) {
     const int kind = (f / 3) % 8;
     FrameHull h;
-    h.N = kind == 3 || kind == 7 ? Eigen::MatrixXd::Zero(channels, 0) : Eigen::MatrixXd(Eigen::MatrixXd::Random(channels, columns));
+    h.N = kind == 3 || kind == 7 ? Eigen::MatrixXd::Zero(channels, 0)
+                                 : Eigen::MatrixXd(Eigen::MatrixXd::Random(channels, columns));
     const int k = static_cast<int>(h.N.cols());
     auto lambda = [&] { return k ? random_lambda() : Eigen::VectorXd(); };
     const Eigen::Vector2d middle(4 * signed_unit(rng), 1 + unit(rng));
     if (kind <= 3) {
       // Points of an ellipse in angular order: a convex polygon, counter-clockwise.
       const int n = 3 + static_cast<int>(unit(rng) * 10);
-      const double rx = 2 + 18 * unit(rng), ry = 0.5 + 4.5 * unit(rng), turn = 2 * std::numbers::pi * unit(rng);
+      const double rx = 2 + 18 * unit(rng), ry = 0.5 + 4.5 * unit(rng),
+                   turn = 2 * std::numbers::pi * unit(rng);
       std::vector<double> angles;
       for (int i = 0; i < n; ++i) angles.push_back(turn + 2 * std::numbers::pi * unit(rng));
       std::sort(angles.begin(), angles.end());
-      for (double a : angles) h.vertices.push_back(middle + Eigen::Vector2d(rx * std::cos(a), ry * std::sin(a)));
+      for (double a : angles)
+        h.vertices.push_back(middle + Eigen::Vector2d(rx * std::cos(a), ry * std::sin(a)));
       const int j = static_cast<int>(unit(rng) * n);
       if (kind == 1) {
         h.centre = h.vertices[static_cast<std::size_t>(j)];
       } else if (kind == 2) {
-        h.centre = 0.5 * (h.vertices[static_cast<std::size_t>(j)] + h.vertices[static_cast<std::size_t>((j + 1) % n)]);
+        h.centre = 0.5 * (h.vertices[static_cast<std::size_t>(j)] +
+                          h.vertices[static_cast<std::size_t>((j + 1) % n)]);
       } else {
         Eigen::Vector2d sum = Eigen::Vector2d::Zero();
         double total = 0;
@@ -142,11 +148,12 @@ Mixed mixed(int frames, unsigned seed) {
 struct Reference {
   double value, d_a, d_b;
 };
-Reference reference_frame(const BakedObjective& o, const FrameHull& h, int f, const Eigen::Vector2d& x, double alpha) {
+Reference reference_frame(const BakedObjective& o, const FrameHull& h, int f, const Eigen::Vector2d& x,
+                          double alpha) {
   const Quadratic& q = o.quadratic(f, find_sector(h, x, 0));
   const double a = x.x(), b = x.y();
-  Reference r{q[0] * b * b + q[1] * a * a + q[2] * a * b + q[3] * b + q[4] * a + q[5], 2 * q[1] * a + q[2] * b + q[4],
-              2 * q[0] * b + q[2] * a + q[3]};
+  Reference r{q[0] * b * b + q[1] * a * a + q[2] * a * b + q[3] * b + q[4] * a + q[5],
+              2 * q[1] * a + q[2] * b + q[4], 2 * q[0] * b + q[2] * a + q[3]};
   if (h.status == HullStatus::Flight) {
     const Quadratic& w = o.flight_quadratic(f);
     r.value += alpha * (w[0] * b * b + w[1] * a * a + w[2] * a * b + w[3] * b + w[4] * a + w[5]);
@@ -169,7 +176,8 @@ Reference reference_frame(const BakedObjective& o, const FrameHull& h, int f, co
 TEST_CASE("the baked objective agrees with a plain evaluation everywhere, whatever the hint") {
   const double fps = 30, alpha = 1000;
   const Mixed c = mixed(96, 11);
-  const BakedObjective o(c.hulls, c.torques, c.targets, c.skeleton, fps, {.alpha = alpha, .beta = 1, .torque_scale = 40});
+  const BakedObjective o(c.hulls, c.torques, c.targets, c.skeleton, fps,
+                         {.alpha = alpha, .beta = 1, .torque_scale = 40});
   const int last = static_cast<int>(c.hulls.frames.size()) - 1;
   std::mt19937 rng(17);
   std::uniform_real_distribution<double> unit(0, 1);
@@ -223,7 +231,8 @@ TEST_CASE("the baked objective agrees with a plain evaluation everywhere, whatev
     for (int i = 0; i < 40; ++i) {
       const Eigen::Vector2d& v = h.vertices[static_cast<std::size_t>(i) % n];
       const Eigen::Vector2d& w = h.vertices[(static_cast<std::size_t>(i) + 1) % n];
-      const double t = i % 2 ? unit(rng) : 0.0, offset = std::pow(10.0, -9 * unit(rng)) * (unit(rng) < 0.5 ? -1 : 1);
+      const double t = i % 2 ? unit(rng) : 0.0,
+                   offset = std::pow(10.0, -9 * unit(rng)) * (unit(rng) < 0.5 ? -1 : 1);
       const Eigen::Vector2d direction(std::cos(7.0 * i), std::sin(7.0 * i));
       const double p = (f + (i % 4 == 0 ? 0.0 : unit(rng))) / fps;
       check(p, v + t * (w - v) + offset * direction, hint);
@@ -262,21 +271,26 @@ TEST_CASE("the baked objective's partial derivatives match finite differences, i
       int k = 0;
       return objective.evaluate(x, y, z, k).value;
     };
-    CHECK(c.d_pddot == Approx((value(pp, aa + h, bb) - value(pp, aa - h, bb)) / (2 * h)).epsilon(1e-5).margin(1e-6));
-    CHECK(c.d_pdot2 == Approx((value(pp, aa, bb + h) - value(pp, aa, bb - h)) / (2 * h)).epsilon(1e-5).margin(1e-6));
+    CHECK(c.d_pddot ==
+          Approx((value(pp, aa + h, bb) - value(pp, aa - h, bb)) / (2 * h)).epsilon(1e-5).margin(1e-6));
+    CHECK(c.d_pdot2 ==
+          Approx((value(pp, aa, bb + h) - value(pp, aa, bb - h)) / (2 * h)).epsilon(1e-5).margin(1e-6));
     // Within a frame interval the value is linear in p; across a frame time d_p jumps, so only
     // points off the frame times are checked.
     const double x = pp * 30 - std::floor(pp * 30);
     if (x > 1e-3 && x < 1 - 1e-3)
-      CHECK(c.d_p == Approx((value(pp + h, aa, bb) - value(pp - h, aa, bb)) / (2 * h)).epsilon(1e-5).margin(1e-6));
+      CHECK(c.d_p ==
+            Approx((value(pp + h, aa, bb) - value(pp - h, aa, bb)) / (2 * h)).epsilon(1e-5).margin(1e-6));
   }
 }
 
 TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every sector") {
   const BoxAndFlight c = box_and_flight();
-  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 1, .beta = 2, .torque_scale = 0.5});
+  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30,
+                                 {.alpha = 1, .beta = 2, .torque_scale = 0.5});
   for (int f : {3, 20}) {
-    for (const Eigen::Vector2d& x : {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
+    for (const Eigen::Vector2d& x :
+         {Eigen::Vector2d(0, 1), Eigen::Vector2d(5, 3), Eigen::Vector2d(-100, -2)}) {
       const Eigen::VectorXd tau = c.torques[static_cast<std::size_t>(f)].at(x.y(), x.x(), c.hulls.gravity);
       CHECK(objective.parts(f, x.x(), x.y()).torque == Approx(2 * tau.squaredNorm() / 0.25));
     }
@@ -297,7 +311,8 @@ TEST_CASE("the baked torque term is the force model's |τ − τ'|² in every se
   CHECK(objective.parts(3, 30, 40).feasibility > 0);
   int h0 = 0, h1 = 0;
   const double p20 = 20.0 / 30;
-  const SampleCost light = objective.evaluate(p20, 0.5, 1.5, h0), heavy = flight_heavy.evaluate(p20, 0.5, 1.5, h1);
+  const SampleCost light = objective.evaluate(p20, 0.5, 1.5, h0),
+                   heavy = flight_heavy.evaluate(p20, 0.5, 1.5, h1);
   const Eigen::VectorXd tau = c.torques[20].at(1.5, 0.5, c.hulls.gravity);
   const double torque = 2 * tau.squaredNorm() / 0.25;
   CHECK(heavy.value - torque == Approx(7 * (light.value - torque)));
@@ -309,7 +324,8 @@ TEST_CASE("retiming a clip with a flight to a shorter duration keeps the flight 
   // 2 s of source into 1.3 s: the flight second keeps its second, the other second of source
   // plays in 0.3 s.
   const BoxAndFlight c = box_and_flight();
-  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30, {.alpha = 1000, .beta = 0.01});
+  const BakedObjective objective(c.hulls, c.torques, c.targets, c.skeleton, 30,
+                                 {.alpha = 1000, .beta = 0.01});
   const RetimeResult r = retime(objective, {.duration = 1.3, .knot_spacing = 0.05});
   INFO(r.message);
   CHECK(r.converged);
@@ -320,7 +336,8 @@ TEST_CASE("retiming a clip with a flight to a shorter duration keeps the flight 
     const int f = static_cast<int>(std::lround(s.p * 30));
     if (f >= 18 && f <= 42) ++flight, flight_at_speed += std::abs(s.pdot - 1) < 0.1;
     if (f < 15 || f > 45)
-      worst_outside = std::max(worst_outside, std::sqrt(objective.parts(f, s.pddot, s.pdot * s.pdot).feasibility / 1000));
+      worst_outside =
+          std::max(worst_outside, std::sqrt(objective.parts(f, s.pddot, s.pdot * s.pdot).feasibility / 1000));
   }
   CHECK(flight_at_speed == flight);
   CHECK(worst_outside < 0.5);  // against a box 120 wide and 30 high: the speed-up after landing
@@ -334,9 +351,9 @@ TEST_CASE("retime_clip solves a clip with flight from two starts and keeps the l
   CHECK_THAT(r.message, Catch::Contains("the better of two starts (constant speed; flights at source speed"));
   // The same objective solved from constant speed alone: the kept solution is no worse.
   const std::vector<Eigen::VectorXd> targets = original_torques(c.hulls, c.torques);
-  const BakedObjective objective(c.hulls, c.torques, targets, c.skeleton, 30,
-                                 {.alpha = options.alpha, .beta = options.beta,
-                                  .torque_scale = torque_scale(c.skeleton, targets)});
+  const BakedObjective objective(
+      c.hulls, c.torques, targets, c.skeleton, 30,
+      {.alpha = options.alpha, .beta = options.beta, .torque_scale = torque_scale(c.skeleton, targets)});
   const RetimeResult single = retime(objective, options.solve);
   auto value = [&](const TimeWarp& w) { return integrate(objective, w, sample_grid(w, 30, 4)); };
   CHECK(value(r.warp) <= value(single.warp) * (1 + 1e-12));
@@ -344,8 +361,7 @@ TEST_CASE("retime_clip solves a clip with flight from two starts and keeps the l
   // Pins: one start only (a playback through them is the constant-speed one).
   ClipRetimeOptions pinned = options;
   pinned.solve.pins = {{.source_time = 1.0, .output_time = 0.5}};
-  CHECK_THAT(retime_clip(c.hulls, c.torques, 30, pinned, c.skeleton).message,
-             !Catch::Contains("two starts"));
+  CHECK_THAT(retime_clip(c.hulls, c.torques, 30, pinned, c.skeleton).message, !Catch::Contains("two starts"));
   // A clip of nothing but flight (a library caller's: retime.hulls refuses it) has no rest to
   // speed up: one start.
   BoxAndFlight all_flight = c;
@@ -358,7 +374,8 @@ TEST_CASE("retime_clip solves a clip with flight from two starts and keeps the l
   }
   // Longer than the source: the flight at source speed would leave time with nothing to play.
   const ClipRetimeOptions longer{.solve = {.duration = 2.5, .knot_spacing = 0.05}};
-  const ClipRetime flying = retime_clip(all_flight.hulls, all_flight.torques, 30, longer, all_flight.skeleton);
+  const ClipRetime flying =
+      retime_clip(all_flight.hulls, all_flight.torques, 30, longer, all_flight.skeleton);
   CHECK_THAT(flying.message, !Catch::Contains("two starts"));
   CHECK(flying.warp.strictly_increasing());
 }

@@ -13,13 +13,14 @@ namespace {
 // A root with one position and one rotation channel following known curves at 60 fps.
 motion::Motion known_curves(int frames, double fps) {
   auto skeleton = std::make_shared<motion::Skeleton>();
-  skeleton->add_joint({.name = "root",
-                       .channels = {{.kind = motion::ChannelKind::Xposition}, {.kind = motion::ChannelKind::Yrotation}}});
+  skeleton->add_joint(
+      {.name = "root",
+       .channels = {{.kind = motion::ChannelKind::Xposition}, {.kind = motion::ChannelKind::Yrotation}}});
   motion::Motion m{skeleton, motion::FrameMatrix::Zero(frames, 2), fps, "curves"};
   for (int f = 0; f < frames; ++f) {
     const double t = f / fps;
-    m.values(f, 0) = 0.5 * t * t * t;                               // x = t³/2
-    m.values(f, 1) = motion::wrap_angle(3.0 * t);                   // turns through +-180 degrees
+    m.values(f, 0) = 0.5 * t * t * t;              // x = t³/2
+    m.values(f, 1) = motion::wrap_angle(3.0 * t);  // turns through +-180 degrees
   }
   return m;
 }

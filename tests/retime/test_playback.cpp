@@ -10,8 +10,9 @@ namespace {
 
 motion::Motion ramp(int frames, double fps) {
   auto skeleton = std::make_shared<motion::Skeleton>();
-  skeleton->add_joint({.name = "root",
-                       .channels = {{.kind = motion::ChannelKind::Xposition}, {.kind = motion::ChannelKind::Zrotation}}});
+  skeleton->add_joint(
+      {.name = "root",
+       .channels = {{.kind = motion::ChannelKind::Xposition}, {.kind = motion::ChannelKind::Zrotation}}});
   motion::Motion m{skeleton, motion::FrameMatrix::Zero(frames, 2), fps, "ramp"};
   for (int f = 0; f < frames; ++f) m.values(f, 0) = f * 0.1, m.values(f, 1) = 0.01 * f;
   return m;

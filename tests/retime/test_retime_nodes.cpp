@@ -9,16 +9,16 @@
 #include <string>
 #include <vector>
 
-#include "kg/retime/nodes.hpp"
+#include "../support/node_context.hpp"
+#include "kg/body/body_build.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/yaml_io.hpp"
-#include "../support/node_context.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/body/body_build.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
+#include "kg/retime/nodes.hpp"
 #include "kg/retime/path.hpp"
 #include "kg/synth/synthesize.hpp"
 
@@ -45,8 +45,9 @@ graph::NodeType value_node(const std::string& type, const graph::Value& value) {
    private:
     graph::Value v_;
   };
-  return {graph::NodeSpec{type, 1, "a value made by the test", {}, {{"out", value.type_name(), true, ""}}, {}},
-          [value](const graph::Params&) { return std::make_unique<ValueNode>(value); }};
+  return {
+      graph::NodeSpec{type, 1, "a value made by the test", {}, {{"out", value.type_name(), true, ""}}, {}},
+      [value](const graph::Params&) { return std::make_unique<ValueNode>(value); }};
 }
 
 // retime.hulls' types, and test.body, test.contacts, test.contacts_copy (equal contacts in
@@ -56,7 +57,8 @@ graph::Registry hulls_registry() {
   const std::map<std::string, graph::Value> in = walk_inputs();
   registry.add_node(value_node("test.body", in.at("body")));
   registry.add_node(value_node("test.contacts", in.at("contacts")));
-  registry.add_node(value_node("test.contacts_copy", graph::Value::make(in.at("contacts").get<retime::Contacts>())));
+  registry.add_node(
+      value_node("test.contacts_copy", graph::Value::make(in.at("contacts").get<retime::Contacts>())));
   registry.add_node(value_node("test.torques", in.at("torques")));
   return registry;
 }
@@ -64,8 +66,9 @@ graph::Registry hulls_registry() {
 // Graph text: the inputs and, per entry, a retime.hulls node `id` with `params` whose contacts
 // come from `contacts`.
 std::string hulls_graph(const std::vector<std::array<std::string, 3>>& hulls) {
-  std::string text = "version: 1\nnodes:\n  body: {type: test.body}\n  contacts: {type: test.contacts}\n"
-                     "  contacts_copy: {type: test.contacts_copy}\n  torques: {type: test.torques}\n";
+  std::string text =
+      "version: 1\nnodes:\n  body: {type: test.body}\n  contacts: {type: test.contacts}\n"
+      "  contacts_copy: {type: test.contacts_copy}\n  torques: {type: test.torques}\n";
   std::string wires = "connections:\n";
   for (const auto& [id, params, contacts] : hulls) {
     text += "  " + id + ": {type: retime.hulls, params: {" + params + "}}\n";
@@ -89,12 +92,11 @@ graph::RunOptions quiet(int jobs) {
 
 TEST_CASE("retime.hulls nodes with the same params and inputs share one build", "[retime][hulls][node]") {
   const graph::Registry registry = hulls_registry();
-  const graph::Graph g = graph::load_graph_from_string(
-      hulls_graph({{"first", "", "contacts"},
-                   {"same", "", "contacts"},
-                   {"lighter", "gravity: 5", "contacts"},
-                   {"copy", "", "contacts_copy"}}),
-      "hulls.yaml", registry);
+  const graph::Graph g = graph::load_graph_from_string(hulls_graph({{"first", "", "contacts"},
+                                                                    {"same", "", "contacts"},
+                                                                    {"lighter", "gravity: 5", "contacts"},
+                                                                    {"copy", "", "contacts_copy"}}),
+                                                       "hulls.yaml", registry);
   std::vector<std::pair<std::string, std::string>> logs;
   graph::RunOptions options = quiet(1);
   options.on_log = [&](const std::string& id, const std::string& message) { logs.emplace_back(id, message); };
@@ -104,8 +106,13 @@ TEST_CASE("retime.hulls nodes with the same params and inputs share one build", 
 
   CHECK(run_of(r, "first").same_as.empty());
   CHECK(run_of(r, "same").same_as == "first");
-  CHECK(std::find(logs.begin(), logs.end(), std::make_pair(std::string("same"), std::string(
-                      "same_as: first (the same type, params and inputs: its results, not run again)"))) != logs.end());
+  CHECK(
+      std::find(logs.begin(), logs.end(),
+                std::make_pair(
+                    std::string("same"),
+                    std::string(
+                        "same_as: first (the same type, params and inputs: its results, not run again)"))) !=
+      logs.end());
   CHECK(hulls_of("same") == hulls_of("first"));
   CHECK(&r.outputs.at("same.torques").get<retime::PathTorques>() ==
         &r.outputs.at("first.torques").get<retime::PathTorques>());
@@ -123,16 +130,19 @@ TEST_CASE("retime.hulls nodes with the same params and inputs share one build", 
 
 TEST_CASE("retime.hulls builds again in another run", "[retime][hulls][node]") {
   const graph::Registry registry = hulls_registry();
-  const graph::Graph g = graph::load_graph_from_string(hulls_graph({{"first", "", "contacts"}}), "one.yaml", registry);
+  const graph::Graph g =
+      graph::load_graph_from_string(hulls_graph({{"first", "", "contacts"}}), "one.yaml", registry);
   const graph::RunResult a = graph::run_graph(g, registry, quiet(1));
   const graph::RunResult b = graph::run_graph(g, registry, quiet(1));
   REQUIRE(a.ok);
   REQUIRE(b.ok);
   CHECK(run_of(b, "first").same_as.empty());
-  CHECK(&a.outputs.at("first.hulls").get<retime::Hulls>() != &b.outputs.at("first.hulls").get<retime::Hulls>());
+  CHECK(&a.outputs.at("first.hulls").get<retime::Hulls>() !=
+        &b.outputs.at("first.hulls").get<retime::Hulls>());
 }
 
-TEST_CASE("retime.hulls nodes ready at once share one build, and share its failure", "[retime][hulls][node]") {
+TEST_CASE("retime.hulls nodes ready at once share one build, and share its failure",
+          "[retime][hulls][node]") {
   const graph::Registry registry = hulls_registry();
   {
     const graph::Graph g = graph::load_graph_from_string(
@@ -145,7 +155,8 @@ TEST_CASE("retime.hulls nodes ready at once share one build, and share its failu
   // The walk's torques model no segment, so a mass scale fails inside the build: both nodes
   // fail with its message.
   const graph::Graph g = graph::load_graph_from_string(
-      hulls_graph({{"a", "mass_scale: 2", "contacts"}, {"b", "mass_scale: 2", "contacts"}}), "fail.yaml", registry);
+      hulls_graph({{"a", "mass_scale: 2", "contacts"}, {"b", "mass_scale: 2", "contacts"}}), "fail.yaml",
+      registry);
   const graph::RunResult r = graph::run_graph(g, registry, quiet(2));
   CHECK_FALSE(r.ok);
   CHECK(run_of(r, "a").status == graph::NodeStatus::Failed);

@@ -151,7 +151,9 @@ TEST_CASE("the trapezoid rule on a grid: weights summing to the duration, second
   // halves again as the steps double.
   class Playback final : public PathObjective {
    public:
-    SampleCost evaluate(double, double, double pdot2, int&) const override { return {.value = std::sqrt(pdot2)}; }
+    SampleCost evaluate(double, double, double pdot2, int&) const override {
+      return {.value = std::sqrt(pdot2)};
+    }
     double source_duration() const override { return 3.0; }
     double source_fps() const override { return 30.0; }
   } playback;
@@ -167,9 +169,10 @@ TEST_CASE("the trapezoid rule on a grid: weights summing to the duration, second
 TEST_CASE("integrate and sample_grid refuse grids and rates that do not fit") {
   const SpeedObjective objective(2);
   const TimeWarp warp = uneven_warp(8);
-  CHECK_THROWS_WITH(integrate(objective, warp, SampleGrid{{1, 2, 3}}),
-                    "integrate: a grid of 3 segment counts for a warp of 8 segments (expected one count >= 1 per "
-                    "segment)");
+  CHECK_THROWS_WITH(
+      integrate(objective, warp, SampleGrid{{1, 2, 3}}),
+      "integrate: a grid of 3 segment counts for a warp of 8 segments (expected one count >= 1 per "
+      "segment)");
   CHECK_THROWS_AS(integrate(objective, warp, SampleGrid{{1, 1, 1, 0, 1, 1, 1, 1}}), std::invalid_argument);
   CHECK_THROWS_WITH(sample_grid(warp, 0, 4), Catch::Matchers::StartsWith("sample grid: source fps 0"));
   CHECK_THROWS_WITH(sample_grid(warp, 30, 0), "sample grid: samples_per_frame 0 (expected 1 to 1000)");
@@ -264,7 +267,8 @@ TEST_CASE("retime refuses options out of range, naming the option and the range 
       "RetimeOptions.knot_spacing = 1e-300: expected >= duration / 4096 (0.000488281 s): it cuts the 2 s "
       "output into 2e+300 segments, at most 4096 are solved");
   add({.duration = 2, .knot_spacing = 2.0 / 4097}, "into 4097 segments, at most 4096");
-  add({.duration = 1e6}, "expected >= duration / 4096 (244.141 s): it cuts the 1e+06 s output into 1e+07 segments");
+  add({.duration = 1e6},
+      "expected >= duration / 4096 (244.141 s): it cuts the 1e+06 s output into 1e+07 segments");
   add({.duration = 2, .samples_per_frame = 0}, "RetimeOptions.samples_per_frame = 0: expected 1 to 1000");
   add({.duration = 2, .max_iterations = 0}, "RetimeOptions.max_iterations = 0: expected >= 1");
   add({.duration = 2, .max_iterations = -5}, "RetimeOptions.max_iterations = -5: expected >= 1");

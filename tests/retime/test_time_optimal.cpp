@@ -49,7 +49,8 @@ TEST_CASE("a point hull admits a box around it, so a ballistic stretch passes at
   for (int i = 10; i < 20; ++i) hulls[static_cast<std::size_t>(i)] = {{0.0, 1.0}};
   const TimeOptimalResult r = time_optimal(hulls, 30, {});
   REQUIRE(r.feasible);
-  for (int i = 10; i < 20; ++i) CHECK(r.pdot_squared[static_cast<std::size_t>(i)] == Approx(1).epsilon(0.051));
+  for (int i = 10; i < 20; ++i)
+    CHECK(r.pdot_squared[static_cast<std::size_t>(i)] == Approx(1).epsilon(0.051));
 }
 
 TEST_CASE("a time-optimal playback that nearly stops still gives an increasing warp within the clip") {

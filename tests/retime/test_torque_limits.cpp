@@ -9,9 +9,9 @@
 #include <string>
 
 #include "hull_test_bodies.hpp"
+#include "kg/body/body_build.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/motion/resample.hpp"
-#include "kg/body/body_build.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/force_model.hpp"
 #include "kg/retime/torque_limits.hpp"

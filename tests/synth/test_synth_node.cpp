@@ -1,11 +1,11 @@
 #include <catch2/catch.hpp>
 
-#include "kg/motion/nodes.hpp"
-#include "kg/builtin_nodes.hpp"
 #include "kg/base/error.hpp"
+#include "kg/builtin_nodes.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/registry.hpp"
 #include "kg/graph/yaml_io.hpp"
+#include "kg/motion/nodes.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;

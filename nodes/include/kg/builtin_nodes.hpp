@@ -8,11 +8,11 @@
 
 namespace kg {
 
-std::vector<graph::NodeType> motion_node_types();  // motion.resample, motion.frame_range (nodes/motion)
-std::vector<graph::NodeType> bvh_node_types();     // io.import_bvh, io.export_bvh, io.export_motion (io)
-std::vector<graph::NodeType> asf_amc_node_types(); // io.import_asf_amc, io.import_motion (nodes/io)
-std::vector<graph::NodeType> report_node_types();  // io.write_report (nodes/io)
-std::vector<graph::NodeType> synth_node_types();   // motion.synthesize (nodes/synth)
+std::vector<graph::NodeType> motion_node_types();   // motion.resample, motion.frame_range (nodes/motion)
+std::vector<graph::NodeType> bvh_node_types();      // io.import_bvh, io.export_bvh, io.export_motion (io)
+std::vector<graph::NodeType> asf_amc_node_types();  // io.import_asf_amc, io.import_motion (nodes/io)
+std::vector<graph::NodeType> report_node_types();   // io.write_report (nodes/io)
+std::vector<graph::NodeType> synth_node_types();    // motion.synthesize (nodes/synth)
 // nodes/retarget: retarget.target, retarget.constraints_on_target, retarget.initial_estimate,
 // retarget.key_spacing
 std::vector<graph::NodeType> retarget_target_node_types();
@@ -23,7 +23,7 @@ std::vector<graph::NodeType> retarget_metrics_node_types();    // retarget.per_f
 std::vector<graph::NodeType> retime_body_node_types();         // retime.body_model (nodes/retime)
 // retime.dynamics, retime.hulls, retime.retime, retime.write_curves, retime.write_forces
 std::vector<graph::NodeType> retime_node_types();
-std::vector<graph::NodeType> retime_contact_node_types();      // retime.contacts (nodes/retime)
+std::vector<graph::NodeType> retime_contact_node_types();  // retime.contacts (nodes/retime)
 
 // Every built-in node type (the lists above, in that order).
 std::vector<graph::NodeType> builtin_node_types();

@@ -26,7 +26,8 @@ bool is_input_file(const std::filesystem::path& path);
 // Creates missing parent directories. Refuses (std::runtime_error naming the path) a target that
 // is an input file. If `write` throws or the stream fails, the temporary file is removed, the
 // target is untouched, and the error propagates (std::runtime_error naming the path).
-void write_file_atomically(const std::filesystem::path& target, const std::function<void(std::ostream&)>& write);
+void write_file_atomically(const std::filesystem::path& target,
+                           const std::function<void(std::ostream&)>& write);
 
 // Removes the temporary file of every write_file_atomically call still in progress in this process,
 // without locks or allocation, so a SIGINT/SIGTERM handler may call it: an interrupted process

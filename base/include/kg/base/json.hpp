@@ -79,7 +79,7 @@ class JsonWriter {
   }
 
  private:
-  struct Document;  // the ordered_json being built and the containers still open
+  struct Document;              // the ordered_json being built and the containers still open
   std::ostream* os_ = nullptr;  // one of os_ and report_
   Report* report_ = nullptr;
   int indent_ = 2;

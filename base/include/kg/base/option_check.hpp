@@ -44,19 +44,25 @@ std::string value_text(const T& value) {
 
 // Throws std::invalid_argument "Owner.field = value: expected range".
 template <class T>
-[[noreturn]] void refuse(std::string_view owner, std::string_view field, const T& value, std::string_view range) {
+[[noreturn]] void refuse(std::string_view owner, std::string_view field, const T& value,
+                         std::string_view range) {
   throw std::invalid_argument(std::string(owner) + "." + std::string(field) + " = " + value_text(value) +
                               ": expected " + std::string(range));
 }
 
 // refuse(...) unless `ok`.
 template <class T>
-void require(bool ok, std::string_view owner, std::string_view field, const T& value, std::string_view range) {
+void require(bool ok, std::string_view owner, std::string_view field, const T& value,
+             std::string_view range) {
   if (!ok) refuse(owner, field, value, range);
 }
 
 // The common ranges of a double (NaN and infinities fail every one of them).
-inline bool positive(double v) { return v > 0 && std::isfinite(v); }      // "> 0 and finite"
-inline bool non_negative(double v) { return v >= 0 && std::isfinite(v); }  // ">= 0 and finite"
+inline bool positive(double v) {
+  return v > 0 && std::isfinite(v);
+}  // "> 0 and finite"
+inline bool non_negative(double v) {
+  return v >= 0 && std::isfinite(v);
+}  // ">= 0 and finite"
 
 }  // namespace kg::options

@@ -27,8 +27,8 @@ class Report {
 
  private:
   friend class JsonWriter;
-  struct Document;                         // the nlohmann::ordered_json (json.cpp)
-  std::shared_ptr<const Document> doc_;    // shared by copies, never modified
+  struct Document;                       // the nlohmann::ordered_json (json.cpp)
+  std::shared_ptr<const Document> doc_;  // shared by copies, never modified
 };
 
 }  // namespace kg

@@ -48,7 +48,8 @@ class YamlReader {
                   const std::vector<std::string>& allowed) const;
   // The same for a map read by key lookups: a key is named by its dotted path in the message
   // ("constraints[0].pionts"; `path` "" for the top level).
-  void check_keys(const YAML::Node& map, const std::string& path, const std::vector<std::string>& allowed) const;
+  void check_keys(const YAML::Node& map, const std::string& path,
+                  const std::vector<std::string>& allowed) const;
   // Requires `version: 1` among the top-level entries.
   void check_version(const std::vector<Entry>& top) const;
   // The entry of `key`, or null.
@@ -59,7 +60,7 @@ class YamlReader {
   double positive(const YAML::Node& node, const std::string& what) const;      // > 0
   double non_negative(const YAML::Node& node, const std::string& what) const;  // >= 0
   int integer(const YAML::Node& node, const std::string& what) const;
-  std::string text(const YAML::Node& node, const std::string& what) const;     // a scalar
+  std::string text(const YAML::Node& node, const std::string& what) const;  // a scalar
 
  private:
   std::string path_;

@@ -35,24 +35,24 @@ struct NodeRun {
   std::string id;
   std::string type;
   NodeStatus status = NodeStatus::Skipped;
-  std::string message;    // the failure's message, or which failed node caused the skip
-  std::string same_as;    // the node of the run with the same key whose results this one took; "" when it ran
-  std::string key;        // the node's key (64 hex digits)
+  std::string message;  // the failure's message, or which failed node caused the skip
+  std::string same_as;  // the node of the run with the same key whose results this one took; "" when it ran
+  std::string key;      // the node's key (64 hex digits)
   double wall_seconds = 0;
   std::vector<std::pair<std::string, Figure>> figures;  // in the order reported
 };
 
 struct RunResult {
-  bool ok = true;                 // every node Ok
+  bool ok = true;  // every node Ok
   double wall_seconds = 0;
-  std::vector<NodeRun> nodes;     // in the graph's node order
+  std::vector<NodeRun> nodes;  // in the graph's node order
   // With RunOptions::keep_outputs: values of every output port of nodes that ran (or took
   // another's results), keyed "node.port" (for tests and tools). Empty otherwise.
   std::map<std::string, Value> outputs;
 };
 
 struct RunOptions {
-  int jobs = 1;  // threads; values < 1 mean 1
+  int jobs = 1;               // threads; values < 1 mean 1
   bool reproducible = false;  // RunContext::reproducible
   // Keep every output in RunResult::outputs (tests, tools). false: each value is freed once its
   // last consumer has run (the CLI and batch items, which need only the files sinks write).

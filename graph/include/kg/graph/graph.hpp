@@ -33,7 +33,7 @@ struct NodeInstance {
   std::string type;
   Params params;  // checked against the type's spec, defaults filled in, variables substituted
   SourceLocation where;
-  NodePtr node;   // built by the registry; shared by every run
+  NodePtr node;  // built by the registry; shared by every run
 };
 
 struct Variable {
@@ -47,10 +47,10 @@ struct Variable {
 struct Graph {
   std::filesystem::path file;
   std::string doc;
-  std::vector<Variable> variables;       // as declared, in file order
+  std::vector<Variable> variables;            // as declared, in file order
   std::map<std::string, std::string> values;  // every variable's value used (defaults and --set)
-  std::vector<std::string> plugins;      // `plugins:` entries, after variable substitution
-  std::vector<NodeInstance> nodes;       // in file order
+  std::vector<std::string> plugins;           // `plugins:` entries, after variable substitution
+  std::vector<NodeInstance> nodes;            // in file order
   std::vector<Connection> connections;
 
   const NodeInstance* find_node(const std::string& id) const;

@@ -55,7 +55,8 @@ class RunContext {
 
   // The type-erased layer under find<T> that contexts implement by forwarding to their
   // registry's find_extension (which guards the interface); nodes call find<T>.
-  virtual std::shared_ptr<const void> find_extension(const std::string& interface, const std::string& name) const {
+  virtual std::shared_ptr<const void> find_extension(const std::string& interface,
+                                                     const std::string& name) const {
     return nullptr;
   }
 

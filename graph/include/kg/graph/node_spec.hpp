@@ -17,7 +17,7 @@ namespace kg::graph {
 
 struct PortSpec {
   std::string name;
-  std::string type;  // stable type name, e.g. "kg.Motion"
+  std::string type;      // stable type name, e.g. "kg.Motion"
   bool required = true;  // inputs only: an unconnected required input is a validation error
   std::string doc;
   // Outputs only: a value set before the node failed still reaches the consumers of this port
@@ -29,10 +29,10 @@ struct PortSpec {
 struct ParamSpec {
   std::string name;
   ParamType type = ParamType::String;
-  ParamValue default_value;      // ignored when required
+  ParamValue default_value;  // ignored when required
   std::string doc;
-  bool required = false;         // no default: the graph file must give it
-  std::optional<double> min{};   // Int, Float, FloatList elements: inclusive bounds
+  bool required = false;        // no default: the graph file must give it
+  std::optional<double> min{};  // Int, Float, FloatList elements: inclusive bounds
   std::optional<double> max{};
   std::vector<std::string> choices{};  // Enum only
 };

@@ -58,10 +58,14 @@ inline constexpr const char* kPluginEntrySymbol = "kg_plugin_entry";
 
 }  // namespace kg::graph
 
-#define KG_PLUGIN(record_function)                                                          \
-  namespace kg_plugin_exports {                                                             \
-  inline std::uint32_t abi_version() { return ::kg::graph::kPluginAbiVersion; }             \
-  inline ::kg::graph::PluginRecord entry() { return record_function(); }                    \
-  }                                                                                         \
-  BOOST_DLL_ALIAS(kg_plugin_exports::abi_version, kg_plugin_abi_version)                    \
+#define KG_PLUGIN(record_function)                                       \
+  namespace kg_plugin_exports {                                          \
+  inline std::uint32_t abi_version() {                                   \
+    return ::kg::graph::kPluginAbiVersion;                               \
+  }                                                                      \
+  inline ::kg::graph::PluginRecord entry() {                             \
+    return record_function();                                            \
+  }                                                                      \
+  }                                                                      \
+  BOOST_DLL_ALIAS(kg_plugin_exports::abi_version, kg_plugin_abi_version) \
   BOOST_DLL_ALIAS(kg_plugin_exports::entry, kg_plugin_entry)

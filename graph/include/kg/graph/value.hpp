@@ -22,14 +22,16 @@ namespace kg::graph {
 template <class T>
 struct TypeName;
 
-#define KG_DECLARE_TYPE(CppType, Name)                   \
-  template <>                                            \
-  struct kg::graph::TypeName<CppType> {                  \
-    static constexpr const char* value = Name;           \
+#define KG_DECLARE_TYPE(CppType, Name)         \
+  template <>                                  \
+  struct kg::graph::TypeName<CppType> {        \
+    static constexpr const char* value = Name; \
   };
 
 template <class T>
-concept Named = requires { TypeName<T>::value; };
+concept Named = requires {
+  TypeName<T>::value;
+};
 
 class Value {
  public:

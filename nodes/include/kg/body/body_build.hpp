@@ -120,9 +120,9 @@
 #include <Eigen/Geometry>
 
 #include "kg/base/error.hpp"
-#include "kg/motion/kinematics.hpp"
 #include "kg/body/anthropometry.hpp"
 #include "kg/body/body_model.hpp"
+#include "kg/motion/kinematics.hpp"
 
 namespace kg::body {
 

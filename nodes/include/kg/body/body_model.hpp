@@ -23,21 +23,21 @@
 namespace kg::body {
 
 struct SegmentInertia {
-  double mass = 0;                                      // kg, >= 0 (0: a massless joint)
-  Eigen::Vector3d com = Eigen::Vector3d::Zero();        // metres, in the joint's frame
-  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();    // kg m², about com, joint-frame axes
+  double mass = 0;                                    // kg, >= 0 (0: a massless joint)
+  Eigen::Vector3d com = Eigen::Vector3d::Zero();      // metres, in the joint's frame
+  Eigen::Matrix3d inertia = Eigen::Matrix3d::Zero();  // kg m², about com, joint-frame axes
 };
 
 struct BodyModel {
-  std::shared_ptr<const motion::Skeleton> skeleton;     // shared, immutable
-  std::vector<SegmentInertia> segments{};               // one per joint, skeleton order
-  std::vector<std::string> segment_class{};             // per joint: table segment ("thigh"), "" if massless
+  std::shared_ptr<const motion::Skeleton> skeleton;  // shared, immutable
+  std::vector<SegmentInertia> segments{};            // one per joint, skeleton order
+  std::vector<std::string> segment_class{};          // per joint: table segment ("thigh"), "" if massless
   // Bounds on each channel's generalised force (N or N m), channel_count() long each;
   // +-infinity where unlimited. Root channels are 0 and 0 (unactuated).
   Eigen::VectorXd torque_min{};
   Eigen::VectorXd torque_max{};
-  double friction = 0.5;                                // Coulomb coefficient of every contact
-  Eigen::Vector3d gravity{0.0, -9.81, 0.0};             // m/s², world frame (+Y up)
+  double friction = 0.5;                     // Coulomb coefficient of every contact
+  Eigen::Vector3d gravity{0.0, -9.81, 0.0};  // m/s², world frame (+Y up)
 
   double total_mass() const {
     double sum = 0;

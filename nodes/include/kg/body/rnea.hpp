@@ -39,8 +39,8 @@
 
 #include <Eigen/Geometry>
 
-#include "kg/motion/kinematics.hpp"
 #include "kg/body/body_model.hpp"
+#include "kg/motion/kinematics.hpp"
 
 namespace kg::body {
 

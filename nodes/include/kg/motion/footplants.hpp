@@ -8,11 +8,11 @@
 // where h <= height_threshold and v <= speed_threshold, and lasts while h <= height_threshold *
 // hysteresis and v <= speed_threshold * hysteresis; the span's end frames farther than
 // trim_distance from its median position are trimmed off (the roll into and out of a plant),
-// and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest level (an ankle rests 7-10 cm
-// above a toe tip): its lowest height within `rest_window_s` around the frame (captured floors
-// slope and drift by centimetres between steps), or with rest_window_s = 0 the `floor_percentile`
-// of its heights over the clip. The floor (for the constraints: above-floor regions) is given, or
-// estimated as the `floor_percentile` of the lowest point's heights.
+// and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest
+// level (an ankle rests 7-10 cm above a toe tip): its lowest height within `rest_window_s` around the frame
+// (captured floors slope and drift by centimetres between steps), or with rest_window_s = 0 the
+// `floor_percentile` of its heights over the clip. The floor (for the constraints: above-floor regions) is
+// given, or estimated as the `floor_percentile` of the lowest point's heights.
 //
 //   FootplantDetection d = detect_footplants(walk, {});
 //   for (const Footplant& p : d.plants) use(d.points[p.point].name, p.first_frame, p.last_frame);
@@ -31,9 +31,10 @@ namespace kg::motion {
 
 struct FootplantOptions {
   // Points by joint name: "LeftToeBase" (the joint's origin), "LeftToeBase/end" (its first End
-  // Site) or "LeftFoot[0 -0.07 -0.05]" (a point in the joint's frame, metres: a heel). Empty: per foot, the ankle (foot joint origin) and the toe tip (End Site of the toe
-  // joint, else the toe joint, else the foot's End Site), by common names (LeftFoot/LeftToeBase,
-  // CMU ASF lfoot/ltoes, l_foot/l_toes, LeftAnkle/LeftToe, ...).
+  // Site) or "LeftFoot[0 -0.07 -0.05]" (a point in the joint's frame, metres: a heel). Empty: per foot, the
+  // ankle (foot joint origin) and the toe tip (End Site of the toe joint, else the toe joint, else the foot's
+  // End Site), by common names (LeftFoot/LeftToeBase, CMU ASF lfoot/ltoes, l_foot/l_toes, LeftAnkle/LeftToe,
+  // ...).
   std::vector<std::string> points{};
   double height_threshold = 0.03;  // m above the point's rest level to enter a plant
   double speed_threshold = 0.15;   // m/s horizontal to enter a plant
@@ -41,15 +42,15 @@ struct FootplantOptions {
   double min_duration_s = 0.08;    // shorter spans are dropped
   int min_duration_frames = 3;     // and spans of fewer frames than this
   double floor = std::numeric_limits<double>::quiet_NaN();  // m; NaN: estimated
-  double floor_percentile = 0.05;  // in [0, 0.5]
+  double floor_percentile = 0.05;                           // in [0, 0.5]
   // With a given floor, every point's rest level is the floor itself instead of its own low
   // heights: for points on the sole (a foot's contact vertices), whose planted height is the
   // floor's. Ignored when the floor is estimated.
   bool rest_on_floor = false;
-  double trim_distance = 0.01;     // m: a plant's end frames farther than this from its median
-                                   // position are trimmed off (0: no trimming)
-  double rest_window_s = 1.0;      // s, >= 0 (0: one rest level per point for the whole clip)
-  int character = 0;               // written into the PointRefs
+  double trim_distance = 0.01;  // m: a plant's end frames farther than this from its median
+                                // position are trimmed off (0: no trimming)
+  double rest_window_s = 1.0;   // s, >= 0 (0: one rest level per point for the whole clip)
+  int character = 0;            // written into the PointRefs
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
@@ -58,8 +59,8 @@ struct FootplantOptions {
 struct PlantPoint {
   std::string name;  // "LeftToeBase/end", "LeftFoot"
   PointRef point;
-  double rest_height = 0;  // m, world: the floor_percentile of its heights (its clip-wide rest
-                           // level), or the given floor (rest_on_floor)
+  double rest_height = 0;         // m, world: the floor_percentile of its heights (its clip-wide rest
+                                  // level), or the given floor (rest_on_floor)
   std::vector<double> heights{};  // m, world: its height at every frame of the motion
   // m, world: at every frame, the level its height is measured above to detect plants (its
   // lowest height within rest_window_s around the frame, or rest_height).
@@ -67,20 +68,20 @@ struct PlantPoint {
 };
 
 struct Footplant {
-  int point = 0;            // index into FootplantDetection::points
-  int first_frame = 0;      // inclusive
-  int last_frame = 0;       // inclusive
-  Eigen::Vector3d mean;     // mean world position over the plant, metres
-  double skate = 0;         // greatest horizontal distance from the first frame's position, m
+  int point = 0;         // index into FootplantDetection::points
+  int first_frame = 0;   // inclusive
+  int last_frame = 0;    // inclusive
+  Eigen::Vector3d mean;  // mean world position over the plant, metres
+  double skate = 0;      // greatest horizontal distance from the first frame's position, m
 };
 
 struct FootplantDetection {
   std::vector<PlantPoint> points;
-  std::vector<Footplant> plants;  // ordered by point, then time
-  double floor = 0;               // m, world height of the floor (given or estimated)
-  bool floor_estimated = false;   // floor was not given
-  std::vector<std::string> notes; // which points were chosen, floor estimate
-  int count(int point) const;     // plants of one point
+  std::vector<Footplant> plants;   // ordered by point, then time
+  double floor = 0;                // m, world height of the floor (given or estimated)
+  bool floor_estimated = false;    // floor was not given
+  std::vector<std::string> notes;  // which points were chosen, floor estimate
+  int count(int point) const;      // plants of one point
 };
 
 // Node-parameter text for the options above: "LeftFoot, RightToeBase/end" gives the names,

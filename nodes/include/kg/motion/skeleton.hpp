@@ -27,9 +27,13 @@ namespace kg::motion {
 
 enum class ChannelKind : std::uint8_t { Xposition, Yposition, Zposition, Xrotation, Yrotation, Zrotation };
 
-inline bool is_rotation(ChannelKind k) { return k >= ChannelKind::Xrotation; }
+inline bool is_rotation(ChannelKind k) {
+  return k >= ChannelKind::Xrotation;
+}
 // 0, 1, 2 for X, Y, Z.
-inline int axis_index(ChannelKind k) { return static_cast<int>(k) % 3; }
+inline int axis_index(ChannelKind k) {
+  return static_cast<int>(k) % 3;
+}
 // "Xposition", ..., "Zrotation" (BVH names).
 const char* to_string(ChannelKind k);
 std::optional<ChannelKind> channel_kind_from_string(const std::string& bvh_name);
@@ -43,11 +47,11 @@ struct Channel {
 
 struct Joint {
   std::string name;
-  int parent = -1;                                    // index of the parent joint, -1 for a root
-  Eigen::Vector3d offset = Eigen::Vector3d::Zero();   // metres, in the parent's frame
-  Eigen::Matrix3d axis = Eigen::Matrix3d::Identity(); // ASF `axis`: the frame channels rotate in
+  int parent = -1;                                     // index of the parent joint, -1 for a root
+  Eigen::Vector3d offset = Eigen::Vector3d::Zero();    // metres, in the parent's frame
+  Eigen::Matrix3d axis = Eigen::Matrix3d::Identity();  // ASF `axis`: the frame channels rotate in
   std::vector<Channel> channels{};
-  int first_channel = 0;                              // index of channels[0] in a frame's values
+  int first_channel = 0;  // index of channels[0] in a frame's values
   // Tips: BVH "End Site" offsets (metres, this joint's frame). Usually zero or one.
   std::vector<Eigen::Vector3d> end_sites{};
 };

@@ -24,10 +24,13 @@ struct NearestPoint {
 // Internal linkage: each user's copy is called directly or inlined, never through the library's PLT.
 namespace {
 
-inline double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+inline double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  return a.x() * b.y() - a.y() * b.x();
+}
 
 // Closest point of segment [a, b] to x.
-inline Eigen::Vector2d on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& x) {
+inline Eigen::Vector2d on_segment(const Eigen::Vector2d& a, const Eigen::Vector2d& b,
+                                  const Eigen::Vector2d& x) {
   const Eigen::Vector2d e = b - a;
   const double ee = e.squaredNorm();
   if (ee == 0) return a;

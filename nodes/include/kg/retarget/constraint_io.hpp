@@ -63,4 +63,3 @@ ConstraintSet joint_limit_constraints(const motion::Skeleton& skeleton, int char
 void merge_constraints(ConstraintSet& into, const ConstraintSet& more);
 
 }  // namespace kg::retarget
-

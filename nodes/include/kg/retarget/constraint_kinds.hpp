@@ -123,13 +123,13 @@ void evaluate_sample(const ConstraintKind& kind, const Constraint& constraint, c
 // (about radians when small) for orientation equality rows, cosines for its inequality row.
 struct KindViolation {
   std::string kind;
-  int rows = 0;                // rows evaluated (samples x rows per sample)
-  int counted_rows = 0;        // rows in the mean
-  int violated_rows = 0;       // rows violated by more than `tolerance`
+  int rows = 0;           // rows evaluated (samples x rows per sample)
+  int counted_rows = 0;   // rows in the mean
+  int violated_rows = 0;  // rows violated by more than `tolerance`
   double worst = 0;
   double mean = 0;
-  std::string worst_label;     // the constraint holding the worst row
-  int worst_frame = -1;        // the first frame of that row's sample
+  std::string worst_label;  // the constraint holding the worst row
+  int worst_frame = -1;     // the first frame of that row's sample
 };
 struct ViolationSummary {
   std::vector<KindViolation> kinds;  // sorted by kind name, only kinds present in the set

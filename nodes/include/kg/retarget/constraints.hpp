@@ -61,7 +61,7 @@ struct Constraint {
   std::vector<ChannelRef> channels{};
   std::vector<double> params{};  // the kind's numbers (see each kind's doc)
   std::vector<Sample> samples{};
-  double weight = 1.0;           // row scale in least squares
+  double weight = 1.0;  // row scale in least squares
 };
 
 // Point i of `constraint` as sample `sample` reads it (its local offset replaced by the sample's).

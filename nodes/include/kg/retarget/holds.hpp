@@ -27,9 +27,9 @@ struct HoldOptions {
   // on character 0 (points_a) and character 1 (points_b); every pair is tried.
   std::vector<std::string> points_a{};
   std::vector<std::string> points_b{};
-  double max_distance = 0.15;    // m, to enter a hold
-  double hysteresis = 1.25;      // leave at max_distance * hysteresis (>= 1)
-  double min_duration_s = 0.2;   // shorter spans are dropped
+  double max_distance = 0.15;   // m, to enter a hold
+  double hysteresis = 1.25;     // leave at max_distance * hysteresis (>= 1)
+  double min_duration_s = 0.2;  // shorter spans are dropped
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
@@ -44,8 +44,8 @@ struct HoldSpan {
 
 struct HoldDetection {
   std::vector<motion::PlantPoint> points_a, points_b;  // PointRef::character 0 and 1
-  std::vector<HoldSpan> holds;                     // by pair, then time
-  double closest = 0;                          // m, the smallest distance of any pair at any frame
+  std::vector<HoldSpan> holds;                         // by pair, then time
+  double closest = 0;                                  // m, the smallest distance of any pair at any frame
 };
 
 // `a` and `b` must have the same frame count and rate. Throws std::invalid_argument for

@@ -47,7 +47,6 @@
 
 namespace kg::retarget {
 
-
 struct InitialEstimateOptions {
   double smooth_seconds = 0.15;  // Gaussian sigma of the low-pass on the added shift; 0: none
   // Throws std::invalid_argument naming the field, its value and its range when a field is out

@@ -88,9 +88,9 @@ struct KeyGroup {
 std::vector<KeyGroup> parse_key_groups(const std::string& text);
 
 struct KeySpacingOptions {
-  double threshold = 0.1;   // fraction of the band energy, in (0, 1)
-  int spacing = 0;          // frames per key for channels in no group; 0 = automatic
-  std::string groups{};     // parse_key_groups text; "" = one group of every channel
+  double threshold = 0.1;  // fraction of the band energy, in (0, 1)
+  int spacing = 0;         // frames per key for channels in no group; 0 = automatic
+  std::string groups{};    // parse_key_groups text; "" = one group of every channel
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;

@@ -45,9 +45,9 @@
 #include <Eigen/Core>
 
 #include "kg/motion/motion.hpp"
-#include "kg/retarget/displacement.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
+#include "kg/retarget/displacement.hpp"
 
 namespace kg::retarget {
 
@@ -65,9 +65,8 @@ struct CharacterProblem {
   std::vector<bool> frozen{};
 };
 
-
 struct SpacetimeOptions {
-  double epsilon = 1e-4;               // damping weight of x^T M x (dimensionless, see above; > 0)
+  double epsilon = 1e-4;  // damping weight of x^T M x (dimensionless, see above; > 0)
   // Converged when every row is within these. 1 mm is the acceptance figure (the paper
   // met a quarter inch); a tighter tolerance that the key spacing cannot reach makes the solve
   // densify keys (step 5), which buys accuracy with high frequencies.
@@ -121,7 +120,7 @@ struct SpacetimeOptions {
 };
 
 struct SpacetimeProblem {
-  std::vector<CharacterProblem> characters;  // one or two (PointRef::character indexes them)
+  std::vector<CharacterProblem> characters;    // one or two (PointRef::character indexes them)
   const ConstraintSet* constraints = nullptr;  // not owned
   KindFinder kinds;
   SpacetimeOptions options{};
@@ -133,20 +132,20 @@ const char* to_string(SpacetimeStatus status);  // "converged", "not converged"
 // Final state of one constraint kind's rows.
 struct KindReport {
   std::string kind;
-  int rows = 0;                      // equality + inequality rows over all samples
-  int active_rows = 0;               // equality rows + violated inequality rows at the end
-  double worst_equality = 0;         // max |r| of the equality rows (metres or radians)
-  double worst_inequality = 0;       // max(0, -r) of the inequality rows
+  int rows = 0;                 // equality + inequality rows over all samples
+  int active_rows = 0;          // equality rows + violated inequality rows at the end
+  double worst_equality = 0;    // max |r| of the equality rows (metres or radians)
+  double worst_inequality = 0;  // max(0, -r) of the inequality rows
   double worst() const { return worst_equality > worst_inequality ? worst_equality : worst_inequality; }
 };
 
 // A constraint still violated past tolerance at the end.
 struct ViolatedConstraint {
   std::string kind, label;
-  double worst = 0;          // metres or radians
-  int first_frame = 0;       // span of its violated samples (their first frames)
+  double worst = 0;     // metres or radians
+  int first_frame = 0;  // span of its violated samples (their first frames)
   int last_frame = 0;
-  bool in_metres = true;     // false when it reads only channel values
+  bool in_metres = true;  // false when it reads only channel values
 };
 
 // The outcome, as data (DESIGN.md tier 3): a solve that cannot meet its constraints is reported
@@ -154,16 +153,16 @@ struct ViolatedConstraint {
 struct SpacetimeResult {
   std::vector<motion::Motion> motions;  // m1 + d per character, on the initial motions' skeletons
   SpacetimeStatus status = SpacetimeStatus::NotConverged;
-  std::string message;                  // "converged in 5 iterations ..." or "did not converge: ..."
-  int iterations = 0;                   // Gauss-Newton iterations over all passes
-  int passes = 0;                       // 1 + densified retries
-  double seconds = 0;                   // wall time of the whole solve
-  std::vector<KindReport> kinds;        // sorted by kind name
+  std::string message;                       // "converged in 5 iterations ..." or "did not converge: ..."
+  int iterations = 0;                        // Gauss-Newton iterations over all passes
+  int passes = 0;                            // 1 + densified retries
+  double seconds = 0;                        // wall time of the whole solve
+  std::vector<KindReport> kinds;             // sorted by kind name
   std::vector<ViolatedConstraint> violated;  // worst first
-  int unknowns = 0;                     // free controls of the last pass
-  int active_rows = 0;                  // at the end
+  int unknowns = 0;                          // free controls of the last pass
+  int active_rows = 0;                       // at the end
   int total_rows = 0;
-  int bandwidth = 0;                    // of the last factored normal matrix
+  int bandwidth = 0;                             // of the last factored normal matrix
   std::vector<std::vector<int>> frames_per_key;  // per character, of the last pass
   double worst_violation() const;
   bool converged() const { return status == SpacetimeStatus::Converged; }
@@ -195,4 +194,3 @@ struct SpacetimeLinearization {
 SpacetimeLinearization linearize_spacetime(const SpacetimeProblem& problem, const Eigen::VectorXd& x);
 
 }  // namespace kg::retarget
-

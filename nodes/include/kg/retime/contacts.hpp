@@ -41,9 +41,9 @@
 
 #include <Eigen/Core>
 
+#include "kg/motion/footplants.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/motion.hpp"
-#include "kg/motion/footplants.hpp"
 
 namespace kg::retime {
 

@@ -14,8 +14,9 @@
 //   PathTorques all = path_torques(body, clip, d, femur);     // every frame, for the nodes
 //
 // Every function checks its inputs (the body cheaply per call, and whole once per clip with
-// check_body_model; sizes) and throws std::invalid_argument naming what is wrong. Functions taking a DynamicsWorkspace allocate only when it is new or the
-// skeleton has grown; the per-frame work allocates nothing.
+// check_body_model; sizes) and throws std::invalid_argument naming what is wrong. Functions taking a
+// DynamicsWorkspace allocate only when it is new or the skeleton has grown; the per-frame work allocates
+// nothing.
 #pragma once
 
 #include <array>
@@ -24,14 +25,14 @@
 
 #include <Eigen/Core>
 
+#include "kg/body/body_model.hpp"
+#include "kg/body/inverse_dynamics.hpp"
+#include "kg/body/rnea.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/motion.hpp"
-#include "kg/body/body_model.hpp"
 #include "kg/retime/path.hpp"
 #include "kg/retime/path_torques.hpp"
 #include "kg/retime/polynomial.hpp"
-#include "kg/body/inverse_dynamics.hpp"
-#include "kg/body/rnea.hpp"
 
 namespace kg::retime {
 
@@ -80,8 +81,8 @@ struct DynamicsWorkspace : body::DynamicsWorkspace {
 // τ(ṗ², p̈, g) at source frame `frame` of `clip` (whose skeleton has body's channels), with q', q''
 // from `d` = path_derivatives(clip): velocity = M q'' + C(q, q') q', acceleration = M q', gravity =
 // ∂τ/∂g (path_torques.hpp). `out`'s storage is reused (no allocation once sized).
-void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d, int frame,
-                   DynamicsWorkspace& ws, FrameTorques& out);
+void frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
+                   int frame, DynamicsWorkspace& ws, FrameTorques& out);
 FrameTorques frame_torques(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
                            int frame, DynamicsWorkspace& ws);
 
@@ -97,8 +98,9 @@ struct MassScaleTorques {
   }
 };
 // `joint`: the segment scaled (0..joint_count-1).
-void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip, const PathDerivatives& d,
-                              int frame, int joint, DynamicsWorkspace& ws, MassScaleTorques& out);
+void frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip,
+                              const PathDerivatives& d, int frame, int joint, DynamicsWorkspace& ws,
+                              MassScaleTorques& out);
 MassScaleTorques frame_torques_mass_scale(const body::BodyModel& body, const motion::Motion& clip,
                                           const PathDerivatives& d, int frame, int joint,
                                           DynamicsWorkspace& ws);

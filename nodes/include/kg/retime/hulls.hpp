@@ -133,12 +133,12 @@ struct Hulls {
 // body's skeleton's channels); contacts must have as many frames. Throws std::invalid_argument for
 // sizes that disagree or options out of range. The root's channels are those of joints without a
 // parent: their rows are fixed at 0 whatever the body's limits say.
-Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts, std::span<const FrameTorques> torques,
-                  const HullOptions& options);
+Hulls build_hulls(const body::BodyModel& body, const Contacts& contacts,
+                  std::span<const FrameTorques> torques, const HullOptions& options);
 
 // One frame's hull and fan (build_hulls does this for every frame, sharing its buffers).
-FrameHull build_frame_hull(const body::BodyModel& body, const ContactFrame& contact, const FrameTorques& torques,
-                           const HullOptions& options);
+FrameHull build_frame_hull(const body::BodyModel& body, const ContactFrame& contact,
+                           const FrameTorques& torques, const HullOptions& options);
 
 // The largest violation of any row (N or N m) by the timing x = (p̈, ṗ²) with contact forces λ
 // (hull.column_count() entries): τ outside [torque_min, torque_max], a root row away from 0, or a

@@ -46,9 +46,9 @@ Quadratic bake_quadratic(const Eigen::VectorXd& t0, const Eigen::VectorXd& ta, c
                          const Eigen::VectorXd& target, double weight);
 
 struct ObjectiveWeights {
-  double alpha = 1000;       // feasibility: per (plane unit)² of distance to the hull
-  double beta = 1;           // torque: per (τ_scale)² of torque error
-  double torque_scale = 1;   // N m (> 0)
+  double alpha = 1000;      // feasibility: per (plane unit)² of distance to the hull
+  double beta = 1;          // torque: per (τ_scale)² of torque error
+  double torque_scale = 1;  // N m (> 0)
   // Multiplies α on flight frames (>= 0). A flight played at the wrong speed shows a wrong
   // gravity, which viewers notice at once (Reitsma & Pollard 2003, sensitivity to errors in
   // ballistic motion); a ground phase a little beyond its hull does not show as plainly. When no
@@ -74,8 +74,9 @@ class BakedObjective final : public PathObjective {
   // objective; torques and targets have one entry per frame (channel_count each). Throws
   // std::invalid_argument for sizes that disagree, fewer than 2 frames or weights out of range.
   // `skeleton` gives the root's rows (its root joints' channels).
-  BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques, std::span<const Eigen::VectorXd> targets,
-                 const motion::Skeleton& skeleton, double source_fps, const ObjectiveWeights& weights);
+  BakedObjective(const Hulls& hulls, std::span<const FrameTorques> torques,
+                 std::span<const Eigen::VectorXd> targets, const motion::Skeleton& skeleton,
+                 double source_fps, const ObjectiveWeights& weights);
 
   // `hint`: the caller's cursor (start it at 0, pass it back; any value is accepted and gives the
   // same cost up to rounding): it holds the fan sectors of the last two frames met, so that

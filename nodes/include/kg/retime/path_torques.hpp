@@ -39,10 +39,10 @@ struct FrameTorques {
 
 struct PathTorques {
   std::shared_ptr<const motion::Skeleton> skeleton;  // shared, immutable
-  double fps = 30;                                    // the clip's frame rate
-  std::vector<FrameTorques> frames{};                 // per frame, the body as modelled (k = 1)
-  std::string segment;                                // joint whose mass may be scaled; "" for none
-  std::vector<FrameTorques> segment_change{};         // per frame, per unit of k; empty without segment
+  double fps = 30;                                   // the clip's frame rate
+  std::vector<FrameTorques> frames{};                // per frame, the body as modelled (k = 1)
+  std::string segment;                               // joint whose mass may be scaled; "" for none
+  std::vector<FrameTorques> segment_change{};        // per frame, per unit of k; empty without segment
 
   int frame_count() const { return static_cast<int>(frames.size()); }
   // Frame f's coefficients with the segment's mass scaled by k (k = 1: frames[f]). Throws
@@ -51,7 +51,8 @@ struct PathTorques {
     const FrameTorques& base = frames.at(static_cast<std::size_t>(frame));
     if (mass_scale == 1) return base;
     if (segment_change.empty())
-      throw std::invalid_argument("path torques: a mass scale needs the segment it scales (none was modelled)");
+      throw std::invalid_argument(
+          "path torques: a mass scale needs the segment it scales (none was modelled)");
     const FrameTorques& change = segment_change.at(static_cast<std::size_t>(frame));
     const double d = mass_scale - 1;
     return {base.velocity + d * change.velocity, base.acceleration + d * change.acceleration,

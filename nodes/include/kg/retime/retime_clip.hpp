@@ -38,13 +38,13 @@ enum class RetimeMode {
 };
 
 struct ClipRetimeOptions {
-  RetimeOptions solve{};            // duration (output s), pins, knot spacing, grid, iterations
+  RetimeOptions solve{};  // duration (output s), pins, knot spacing, grid, iterations
   RetimeMode mode = RetimeMode::Optimise;
   TorqueTarget target = TorqueTarget::Original;
-  double alpha = 1000;              // feasibility weight (ObjectiveWeights)
-  double beta = 1;                  // torque weight
-  double flight_weight = 1;         // multiplies alpha on flight frames (ObjectiveWeights::flight)
-  double inside_tolerance = 0.01;   // plane units: a timing this close to its hull counts as inside
+  double alpha = 1000;             // feasibility weight (ObjectiveWeights)
+  double beta = 1;                 // torque weight
+  double flight_weight = 1;        // multiplies alpha on flight frames (ObjectiveWeights::flight)
+  double inside_tolerance = 0.01;  // plane units: a timing this close to its hull counts as inside
   TimeOptimalOptions time_optimal{};
   // Throws std::invalid_argument naming the field, its value and its range (DESIGN.md 15):
   // alpha, beta, flight_weight and inside_tolerance >= 0 and finite, time_optimal.validate(),
@@ -55,11 +55,11 @@ struct ClipRetimeOptions {
 
 struct ClipRetime {
   TimeWarp warp;
-  RetimeResult solve;                    // Optimise mode
+  RetimeResult solve;                         // Optimise mode
   std::optional<TimeOptimalResult> shortest;  // TimeOptimal mode, or computed when frames are outside
-  double feasibility = 0;                // ∫ α |q − c|² dt at the result
-  double torque = 0;                     // ∫ β |τ − τ'|² / τ_scale² dt
-  double torque_scale = 1;               // N m
+  double feasibility = 0;                     // ∫ α |q − c|² dt at the result
+  double torque = 0;                          // ∫ β |τ − τ'|² / τ_scale² dt
+  double torque_scale = 1;                    // N m
   // Output frames (at the source's rate over the output duration) whose (p̈, ṗ²) lies within
   // inside_tolerance of the hull of the source frame they play, over all output frames; and of
   // those playing frames with an empty polytope, the share at their closest point: for flight, a
@@ -74,7 +74,7 @@ struct ClipRetime {
   // without one (flight, not exactly physical) are reported by share_at_point, not counted here:
   // captured flights scatter about their least-squares points.
   bool feasible = true;
-  std::string message;                   // one paragraph for logs
+  std::string message;  // one paragraph for logs
 };
 
 // Throws std::invalid_argument for inputs that disagree (sizes, a Reference target without

@@ -15,8 +15,8 @@
 // more steps than the solution needs, counts never shrinking) and the solve resumed, at most
 // four solves in all.
 //
-//   RetimeResult r = retime(objective, {.duration = 2.0, .pins = {{.source_time = 1.2, .output_time = 0.5}}});
-//   double source_time = r.warp.at(0.25);
+//   RetimeResult r = retime(objective, {.duration = 2.0, .pins = {{.source_time = 1.2, .output_time =
+//   0.5}}}); double source_time = r.warp.at(0.25);
 #pragma once
 
 #include <string>
@@ -91,13 +91,13 @@ struct SampleGrid {
 struct RetimeResult {
   TimeWarp warp;
   bool converged = false;
-  int iterations = 0;      // L-BFGS iterations over all grids
-  int evaluations = 0;     // objective evaluations
-  SampleGrid grid;         // the final grid (warp.segments() counts): sample_grid(warp) or finer
-  int samples = 0;         // samples of the final grid: grid.samples()
-  double objective = 0;    // the integral at the solution (barrier excluded)
-  double seconds = 0;      // wall time of the solve
-  std::string message;     // Ceres' termination message of the last solve, then each grid refinement
+  int iterations = 0;    // L-BFGS iterations over all grids
+  int evaluations = 0;   // objective evaluations
+  SampleGrid grid;       // the final grid (warp.segments() counts): sample_grid(warp) or finer
+  int samples = 0;       // samples of the final grid: grid.samples()
+  double objective = 0;  // the integral at the solution (barrier excluded)
+  double seconds = 0;    // wall time of the solve
+  std::string message;   // Ceres' termination message of the last solve, then each grid refinement
 };
 
 // Throws std::invalid_argument naming the option for options out of range (a duration that is

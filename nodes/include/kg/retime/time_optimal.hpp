@@ -38,17 +38,18 @@ struct TimeOptimalOptions {
 
 struct TimeOptimalResult {
   bool feasible = false;
-  std::string message;                // why not, naming the frame; or a summary
-  int blocking_frame = -1;            // the first frame with no controllable speed, -1 when feasible
-  std::vector<double> pdot_squared;   // per source frame, the time-optimal ṗ²
-  std::vector<double> output_times;   // per source frame, when it plays (output seconds)
-  double duration = 0;                // output seconds: the shortest feasible duration
-  TimeWarp warp;                      // the profile fitted by a spline (fit_warp); a fit that does
-                                      // not increase strictly makes the result infeasible
+  std::string message;               // why not, naming the frame; or a summary
+  int blocking_frame = -1;           // the first frame with no controllable speed, -1 when feasible
+  std::vector<double> pdot_squared;  // per source frame, the time-optimal ṗ²
+  std::vector<double> output_times;  // per source frame, when it plays (output seconds)
+  double duration = 0;               // output seconds: the shortest feasible duration
+  TimeWarp warp;                     // the profile fitted by a spline (fit_warp); a fit that does
+                                     // not increase strictly makes the result infeasible
 };
 
 // One polygon per source frame (>= 2 frames), fps > 0. Throws std::invalid_argument for an empty
 // polygon or bad sizes; an infeasible path is a result (feasible = false), not an exception.
-TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps, const TimeOptimalOptions& options);
+TimeOptimalResult time_optimal(const std::vector<Polygon>& hulls, double fps,
+                               const TimeOptimalOptions& options);
 
 }  // namespace kg::retime

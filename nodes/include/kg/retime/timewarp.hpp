@@ -20,15 +20,14 @@
 
 #include <Eigen/Core>
 
-
 namespace kg::retime {
 
 // p and its derivatives at one output time, and the controls that shape them there.
 struct WarpSample {
-  double p = 0;       // source seconds
-  double pdot = 0;    // source seconds per output second
-  double pddot = 0;   // per output second²
-  int first = 0;      // controls first .. first + 3 carry the weights below
+  double p = 0;      // source seconds
+  double pdot = 0;   // source seconds per output second
+  double pddot = 0;  // per output second²
+  int first = 0;     // controls first .. first + 3 carry the weights below
   std::array<double, 4> weight{}, weight_first{}, weight_second{};  // ∂p/∂c, ∂ṗ/∂c, ∂p̈/∂c
 };
 
@@ -39,8 +38,8 @@ struct Pin {
 };
 
 struct TimeWarp {
-  double duration = 0;         // output seconds, > 0
-  double source_duration = 0;  // source seconds, > 0
+  double duration = 0;             // output seconds, > 0
+  double source_duration = 0;      // source seconds, > 0
   std::vector<double> controls{};  // source seconds; segments() + 3 of them
 
   int segments() const { return static_cast<int>(controls.size()) - 3; }
@@ -69,7 +68,8 @@ struct WarpConstraints {
 // the open (0, duration) x (0, source_duration) (the ends are kept already), two pins share an
 // output time, or pins run backwards (a later output time playing an earlier source moment: no
 // increasing p(t) meets them).
-WarpConstraints warp_constraints(double source_duration, double duration, int segments, const std::vector<Pin>& pins);
+WarpConstraints warp_constraints(double source_duration, double duration, int segments,
+                                 const std::vector<Pin>& pins);
 
 // A strictly increasing warp meeting the constraints: `playback` (samples of a playback to start
 // from, in increasing output and source time, from (0, 0) to (duration, source_duration); empty:
@@ -87,6 +87,7 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
 // disagree, fewer than 2 samples, or samples that do not start at (0, 0) or do not increase.
 // Callers needing strict increase check strictly_increasing() (samples that stop give a flat
 // stretch).
-TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times, int segments);
+TimeWarp fit_warp(const std::vector<double>& output_times, const std::vector<double>& source_times,
+                  int segments);
 
 }  // namespace kg::retime
