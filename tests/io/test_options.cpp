@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../support/node_context.hpp"
+#include "../support/option_table.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
@@ -20,31 +21,12 @@
 using namespace kg;
 using namespace kg::io;
 using Catch::Matchers::Contains;
-
-namespace {
-
-template <class Options>
-struct Bad {
-  std::string message;
-  std::function<void(Options&)> change;
-};
-
-template <class Options>
-void check_table(const std::vector<Bad<Options>>& table) {
-  REQUIRE_NOTHROW(Options{}.validate());
-  for (const Bad<Options>& bad : table) {
-    Options o;
-    bad.change(o);
-    INFO(bad.message);
-    CHECK_THROWS_AS(o.validate(), std::invalid_argument);
-    CHECK_THROWS_WITH(o.validate(), Contains(bad.message) && Contains("expected"));
-  }
-}
-
-}  // namespace
+using kg::test::check_option_table;
+using kg::test::kInf;
+using kg::test::kNaN;
 
 TEST_CASE("ImportOptions::validate refuses each field out of range") {
-  check_table<ImportOptions>({
+  check_option_table<ImportOptions>({
       {"ImportOptions.units = 'furlong'", [](auto& o) { o.units = "furlong"; }},
       {"ImportOptions.units = 'source'", [](auto& o) { o.units = "source"; }},
       {"ImportOptions.up = 'x'", [](auto& o) { o.up = "x"; }},
@@ -56,12 +38,12 @@ TEST_CASE("ImportOptions::validate refuses each field out of range") {
 }
 
 TEST_CASE("BvhWriteOptions and MotionWriteOptions::validate refuse each field out of range") {
-  check_table<BvhWriteOptions>({
+  check_option_table<BvhWriteOptions>({
       {"BvhWriteOptions.units = 'auto'", [](auto& o) { o.units = "auto"; }},
       {"BvhWriteOptions.precision = 0", [](auto& o) { o.precision = 0; }},
       {"BvhWriteOptions.precision = 13", [](auto& o) { o.precision = 13; }},
   });
-  check_table<MotionWriteOptions>({
+  check_option_table<MotionWriteOptions>({
       {"MotionWriteOptions.units = 'yards'", [](auto& o) { o.units = "yards"; }},
       {"MotionWriteOptions.precision = -1", [](auto& o) { o.precision = -1; }},
   });

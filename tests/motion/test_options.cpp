@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/option_table.hpp"
 #include "kg/motion/footplants.hpp"
 #include "kg/motion/motion.hpp"
 
@@ -16,12 +17,9 @@ using namespace kg::motion;
 using Catch::Matchers::Contains;
 
 TEST_CASE("FootplantOptions::validate refuses each field out of range") {
-  constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-  constexpr double kInf = std::numeric_limits<double>::infinity();
-  struct Bad {
-    std::string message;
-    std::function<void(FootplantOptions&)> change;
-  };
+  using kg::test::kInf;
+  using kg::test::kNaN;
+  using Bad = kg::test::BadOption<FootplantOptions>;
   const std::vector<Bad> table = {
       {"FootplantOptions.height_threshold = 0.0", [](auto& o) { o.height_threshold = 0; }},
       {"FootplantOptions.speed_threshold = -0.1", [](auto& o) { o.speed_threshold = -0.1; }},

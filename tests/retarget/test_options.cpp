@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "../support/node_context.hpp"
+#include "../support/option_table.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/footplants.hpp"
@@ -24,35 +25,12 @@
 using namespace kg;
 using namespace kg::retarget;
 using Catch::Matchers::Contains;
-
-namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-// One invalid setting: what it changes and the text the message must hold ("Struct.field = value").
-template <class Options>
-struct Bad {
-  std::string message;
-  std::function<void(Options&)> change;
-};
-
-template <class Options>
-void check_table(const std::vector<Bad<Options>>& table) {
-  REQUIRE_NOTHROW(Options{}.validate());
-  for (const Bad<Options>& bad : table) {
-    Options o;
-    bad.change(o);
-    INFO(bad.message);
-    CHECK_THROWS_AS(o.validate(), std::invalid_argument);
-    CHECK_THROWS_WITH(o.validate(), Contains(bad.message) && Contains("expected"));
-  }
-}
-
-}  // namespace
+using kg::test::check_option_table;
+using kg::test::kInf;
+using kg::test::kNaN;
 
 TEST_CASE("SpacetimeOptions::validate refuses each field out of range") {
-  check_table<SpacetimeOptions>({
+  check_option_table<SpacetimeOptions>({
       {"SpacetimeOptions.epsilon = 0.0", [](auto& o) { o.epsilon = 0; }},
       {"SpacetimeOptions.epsilon = nan", [](auto& o) { o.epsilon = kNaN; }},
       {"SpacetimeOptions.epsilon = inf", [](auto& o) { o.epsilon = kInf; }},
@@ -102,7 +80,7 @@ TEST_CASE("solve_spacetime and linearize_spacetime validate their options first"
 }
 
 TEST_CASE("PerFrameIkOptions::validate refuses each field out of range") {
-  check_table<PerFrameIkOptions>({
+  check_option_table<PerFrameIkOptions>({
       {"PerFrameIkOptions.epsilon = -1.0", [](auto& o) { o.epsilon = -1; }},
       {"PerFrameIkOptions.epsilon = nan", [](auto& o) { o.epsilon = kNaN; }},
       {"PerFrameIkOptions.max_iterations = 0", [](auto& o) { o.max_iterations = 0; }},
@@ -115,33 +93,24 @@ TEST_CASE("PerFrameIkOptions::validate refuses each field out of range") {
 }
 
 TEST_CASE("HoldOptions::validate refuses each field out of range") {
-  auto valid = [](HoldOptions& o) {
-    o.points_a = {"lHand"};
-    o.points_b = {"rHand"};
-  };
-  std::vector<Bad<HoldOptions>> table = {
-      {"HoldOptions.points_a = []", [](auto& o) { o.points_a.clear(); }},
-      {"HoldOptions.points_b = []", [](auto& o) { o.points_b.clear(); }},
-      {"HoldOptions.max_distance = 0.0", [](auto& o) { o.max_distance = 0; }},
-      {"HoldOptions.max_distance = inf", [](auto& o) { o.max_distance = kInf; }},
-      {"HoldOptions.hysteresis = 0.9", [](auto& o) { o.hysteresis = 0.9; }},
-      {"HoldOptions.min_duration_s = -0.1", [](auto& o) { o.min_duration_s = -0.1; }},
-  };
   HoldOptions good;
-  valid(good);
-  REQUIRE_NOTHROW(good.validate());
-  for (const Bad<HoldOptions>& bad : table) {
-    HoldOptions o = good;
-    bad.change(o);
-    INFO(bad.message);
-    CHECK_THROWS_WITH(o.validate(), Contains(bad.message) && Contains("expected"));
-  }
+  good.points_a = {"lHand"};
+  good.points_b = {"rHand"};
+  check_option_table<HoldOptions>(
+      good, {
+                {"HoldOptions.points_a = []", [](auto& o) { o.points_a.clear(); }},
+                {"HoldOptions.points_b = []", [](auto& o) { o.points_b.clear(); }},
+                {"HoldOptions.max_distance = 0.0", [](auto& o) { o.max_distance = 0; }},
+                {"HoldOptions.max_distance = inf", [](auto& o) { o.max_distance = kInf; }},
+                {"HoldOptions.hysteresis = 0.9", [](auto& o) { o.hysteresis = 0.9; }},
+                {"HoldOptions.min_duration_s = -0.1", [](auto& o) { o.min_duration_s = -0.1; }},
+            });
   good.min_duration_s = 0;
   CHECK_NOTHROW(good.validate());
 }
 
 TEST_CASE("KeySpacingOptions::validate refuses each field out of range") {
-  check_table<KeySpacingOptions>({
+  check_option_table<KeySpacingOptions>({
       {"KeySpacingOptions.threshold = 0.0", [](auto& o) { o.threshold = 0; }},
       {"KeySpacingOptions.threshold = 1.0", [](auto& o) { o.threshold = 1; }},
       {"KeySpacingOptions.threshold = nan", [](auto& o) { o.threshold = kNaN; }},
@@ -156,13 +125,13 @@ TEST_CASE("KeySpacingOptions::validate refuses each field out of range") {
 }
 
 TEST_CASE("InitialEstimateOptions and PlantConstraintOptions validate") {
-  check_table<InitialEstimateOptions>({
+  check_option_table<InitialEstimateOptions>({
       {"InitialEstimateOptions.smooth_seconds = -0.1", [](auto& o) { o.smooth_seconds = -0.1; }},
       {"InitialEstimateOptions.smooth_seconds = inf", [](auto& o) { o.smooth_seconds = kInf; }},
   });
   InitialEstimateOptions none{.smooth_seconds = 0};  // 0: no smoothing
   CHECK_NOTHROW(none.validate());
-  check_table<PlantConstraintOptions>({
+  check_option_table<PlantConstraintOptions>({
       {"PlantConstraintOptions.weight = 0.0", [](auto& o) { o.weight = 0; }},
       {"PlantConstraintOptions.weight = nan", [](auto& o) { o.weight = kNaN; }},
   });

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../support/node_context.hpp"
+#include "../support/option_table.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/hulls.hpp"
@@ -21,29 +22,11 @@
 using namespace kg;
 using namespace kg::retime;
 using Catch::Matchers::Contains;
+using kg::test::check_option_table;
+using kg::test::kInf;
+using kg::test::kNaN;
 
 namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr double kInf = std::numeric_limits<double>::infinity();
-
-template <class Options>
-struct Bad {
-  std::string message;  // "Struct.field = value"
-  std::function<void(Options&)> change;
-};
-
-template <class Options>
-void check_table(const Options& good, const std::vector<Bad<Options>>& table) {
-  REQUIRE_NOTHROW(good.validate());
-  for (const Bad<Options>& bad : table) {
-    Options o = good;
-    bad.change(o);
-    INFO(bad.message);
-    CHECK_THROWS_AS(o.validate(), std::invalid_argument);
-    CHECK_THROWS_WITH(o.validate(), Contains(bad.message) && Contains("expected"));
-  }
-}
 
 RetimeOptions with_duration() {
   RetimeOptions o;
@@ -54,7 +37,7 @@ RetimeOptions with_duration() {
 }  // namespace
 
 TEST_CASE("HullOptions::validate refuses each field out of range") {
-  check_table<HullOptions>(
+  check_option_table<HullOptions>(
       {}, {
               {"HullOptions.pddot_max = 0.0", [](auto& o) { o.pddot_max = 0; }},
               {"HullOptions.pdot2_max = inf", [](auto& o) { o.pdot2_max = kInf; }},
@@ -65,22 +48,22 @@ TEST_CASE("HullOptions::validate refuses each field out of range") {
 }
 
 TEST_CASE("TorqueLimitOptions::validate refuses each field out of range") {
-  check_table<TorqueLimitOptions>({},
-                                  {
-                                      {"TorqueLimitOptions.margin = 0.0", [](auto& o) { o.margin = 0; }},
-                                      {"TorqueLimitOptions.margin = inf", [](auto& o) { o.margin = kInf; }},
-                                      {"TorqueLimitOptions.floor = -1.0", [](auto& o) { o.floor = -1; }},
-                                      {"HullOptions.tolerance = 0.0", [](auto& o) { o.hulls.tolerance = 0; }},
-                                  });
+  check_option_table<TorqueLimitOptions>(
+      {}, {
+              {"TorqueLimitOptions.margin = 0.0", [](auto& o) { o.margin = 0; }},
+              {"TorqueLimitOptions.margin = inf", [](auto& o) { o.margin = kInf; }},
+              {"TorqueLimitOptions.floor = -1.0", [](auto& o) { o.floor = -1; }},
+              {"HullOptions.tolerance = 0.0", [](auto& o) { o.hulls.tolerance = 0; }},
+          });
 }
 
 TEST_CASE("TimeOptimalOptions and RetimeOptions validate") {
-  check_table<TimeOptimalOptions>(
+  check_option_table<TimeOptimalOptions>(
       {}, {
               {"TimeOptimalOptions.point_tolerance = -0.1", [](auto& o) { o.point_tolerance = -0.1; }},
               {"TimeOptimalOptions.knot_spacing = 0.0", [](auto& o) { o.knot_spacing = 0; }},
           });
-  check_table<RetimeOptions>(
+  check_option_table<RetimeOptions>(
       with_duration(),
       {
           {"RetimeOptions.duration = 0.0", [](auto& o) { o.duration = 0; }},
@@ -101,7 +84,7 @@ TEST_CASE("TimeOptimalOptions and RetimeOptions validate") {
 TEST_CASE("ClipRetimeOptions::validate: its own fields, time_optimal, and solve in Optimise mode") {
   ClipRetimeOptions good;
   good.solve = with_duration();
-  check_table<ClipRetimeOptions>(
+  check_option_table<ClipRetimeOptions>(
       good, {
                 {"ClipRetimeOptions.alpha = -1.0", [](auto& o) { o.alpha = -1; }},
                 {"ClipRetimeOptions.beta = nan", [](auto& o) { o.beta = kNaN; }},
@@ -120,7 +103,7 @@ TEST_CASE("ClipRetimeOptions::validate: its own fields, time_optimal, and solve 
 }
 
 TEST_CASE("FootContactOptions::validate refuses each field out of range") {
-  check_table<FootContactOptions>(
+  check_option_table<FootContactOptions>(
       {},
       {
           {"FootContactOptions.heel_ratio = -0.1", [](auto& o) { o.heel_ratio = -0.1; }},

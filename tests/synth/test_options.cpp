@@ -10,52 +10,32 @@
 #include <vector>
 
 #include "../support/node_context.hpp"
+#include "../support/option_table.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/synth/synthesize.hpp"
 
 using namespace kg;
 using namespace kg::synth;
 using Catch::Matchers::Contains;
-
-namespace {
-
-constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-
-template <class Options>
-struct Bad {
-  std::string message;
-  std::function<void(Options&)> change;
-};
-
-template <class Options>
-void check_table(const std::vector<Bad<Options>>& table) {
-  REQUIRE_NOTHROW(Options{}.validate());
-  for (const Bad<Options>& bad : table) {
-    Options o;
-    bad.change(o);
-    INFO(bad.message);
-    CHECK_THROWS_AS(o.validate(), std::invalid_argument);
-    CHECK_THROWS_WITH(o.validate(), Contains(bad.message) && Contains("expected"));
-  }
-}
-
-}  // namespace
+using kg::test::check_option_table;
+using kg::test::kInf;
+using kg::test::kNaN;
 
 TEST_CASE("WalkOptions, JumpOptions and ClimbOptions::validate refuse each field out of range") {
-  check_table<WalkOptions>({
+  check_option_table<WalkOptions>({
       {"synthesize_walk: steps 1", [](auto& o) { o.steps = 1; }},
       {"synthesize_walk: speed 3 m/s", [](auto& o) { o.speed = 3; }},
       {"synthesize_walk: stature nan m", [](auto& o) { o.stature = kNaN; }},
       {"synthesize_walk: fps 5 frames/s", [](auto& o) { o.fps = 5; }},
   });
-  check_table<JumpOptions>({
+  check_option_table<JumpOptions>({
       {"synthesize_jump: height 0.7 m", [](auto& o) { o.height = 0.7; }},
       {"synthesize_jump: distance -0.1 m", [](auto& o) { o.distance = -0.1; }},
       {"synthesize_jump: stature 3 m", [](auto& o) { o.stature = 3; }},
       {"synthesize_jump: fps 2000 frames/s", [](auto& o) { o.fps = 2000; }},
       {"synthesize_jump: gravity 0 m/s^2", [](auto& o) { o.gravity = 0; }},
   });
-  check_table<ClimbOptions>({
+  check_option_table<ClimbOptions>({
       {"synthesize_climb: rungs 0", [](auto& o) { o.rungs = 0; }},
       {"synthesize_climb: rung_spacing 0.5 m", [](auto& o) { o.rung_spacing = 0.5; }},
       {"synthesize_climb: rail_half_width 0.1 m", [](auto& o) { o.rail_half_width = 0.1; }},
