@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <sstream>
@@ -791,6 +792,9 @@ motion::Motion parse_amc(std::string_view text, const std::string& path, const A
       auto t = lines[0].text;
       auto [ptr, ec] = std::from_chars(t.data(), t.data() + t.size(), number);
       if (ec != std::errc() || ptr != t.data() + t.size()) lines.expected("a frame number", 0);
+      // Bounded so that number + 1 cannot overflow and a frame count fits in int.
+      if (number < 0 || number > std::numeric_limits<int>::max())
+        lines.expected("a frame number 0.." + std::to_string(std::numeric_limits<int>::max()), 0);
     }
     if (frames > 0 && number != expected_number) {
       lines.expected("frame number " + std::to_string(expected_number), 0);

@@ -336,7 +336,9 @@ void Parser::parse_motion(BvhClip& clip) {
   if (!iequals(time_kw.text, "Time:")) fail(time_kw, "'Time:' after 'Frame'");
   const Token time_token = next_on_line();
   clip.frame_time = number_token(time_token, "a frame time in seconds after 'Frame Time:'");
-  if (!(clip.frame_time > 0)) fail(time_token, "a frame time > 0 seconds", shown(time_token.text));
+  if (!(clip.frame_time >= kBvhMinFrameTime && clip.frame_time <= kBvhMaxFrameTime))
+    fail(time_token, "a frame time of 1e-06..3600 seconds (1e6 to 1/3600 frames per second)",
+         shown(time_token.text));
   Token extra = next_on_line();
   if (!extra.text.empty()) fail(extra, "end of line after the frame time");
 

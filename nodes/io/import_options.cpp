@@ -231,7 +231,8 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
         if (motion::is_rotation(ch.kind)) continue;
         ch.min *= mpu;  // infinities stay infinite
         ch.max *= mpu;
-        m.values.col(joint.first_channel + static_cast<int>(c)) *= mpu;
+        // Not on a clip without frames: a column of a row-major 0 x n matrix offsets its null data.
+        if (has_frames) m.values.col(joint.first_channel + static_cast<int>(c)) *= mpu;
       }
     }
   }

@@ -1,4 +1,5 @@
 #include "kg/motion/motion.hpp"
+#include "kg/motion/frame_time.hpp"
 
 #include <cmath>
 #include <sstream>
@@ -38,6 +39,21 @@ Motion frame_range(const Motion& motion, int first, int last) {
                                 std::to_string(frames) + " (expected 0 <= first <= last < " +
                                 std::to_string(frames) + "; last -1: the last frame)");
   return {motion.skeleton, motion.values.middleRows(first, end - first + 1), motion.fps, motion.name};
+}
+
+int seconds_to_frame(double seconds, double fps, int frame_count) {
+  const double f = seconds * fps;  // in double: no cast before the range check
+  // Rounds into 0..frame_count-1: -0.5 < f < frame_count - 0.5 (lround rounds halves away from 0).
+  if (!(std::isfinite(f) && f > -0.5 && f < frame_count - 0.5)) {
+    std::ostringstream s;
+    s.precision(10);  // a time that wrapped to a frame as in 35791394.2 s shows whole
+    s << seconds;
+    s.precision(6);
+    s << " s is outside the clip (0.." << (frame_count > 1 ? (frame_count - 1) / fps : 0.0)
+      << " s, frames 0.." << frame_count - 1 << " at " << fps << " fps)";
+    throw std::out_of_range(s.str());
+  }
+  return static_cast<int>(std::lround(f));
 }
 
 }  // namespace kg::motion

@@ -11,12 +11,14 @@
 #include <limits>
 #include <numbers>
 #include <regex>
+#include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
 
 #include "kg/base/error.hpp"
 #include "kg/base/text.hpp"
 #include "kg/base/yaml_reader.hpp"
+#include "kg/motion/frame_time.hpp"
 
 namespace kg::retarget {
 
@@ -121,7 +123,8 @@ class Reader : public kg::YamlReader {
       p.local = Eigen::Vector3d(v[0], v[1], v[2]);
       if (!p.local.allFinite()) fail(path + ".offset: not finite", off.Mark());
     }
-    frame_offset = n["frame_offset"] ? integer(n["frame_offset"], path + ".frame_offset") : 0;
+    frame_offset =
+        n["frame_offset"] ? offset_frames(n["frame_offset"], path + ".frame_offset", p.character) : 0;
     return p;
   }
 
@@ -142,7 +145,8 @@ class Reader : public kg::YamlReader {
       if (!n["joint"] || !n["channel"]) fail(path + ": needs 'joint' and 'channel'", n.Mark());
       joint_name = text(n["joint"], path + ".joint");
       channel_name = text(n["channel"], path + ".channel");
-      if (n["frame_offset"]) frame_offset = integer(n["frame_offset"], path + ".frame_offset");
+      if (n["frame_offset"])
+        frame_offset = offset_frames(n["frame_offset"], path + ".frame_offset", ch.character);
     } else {
       fail(path + ": expected 'Joint.Channel' or {joint, channel}", n.Mark());
     }
@@ -170,10 +174,35 @@ class Reader : public kg::YamlReader {
 
   int frame_count(int character) const { return chars_[static_cast<std::size_t>(character)].frame_count(); }
 
+  int max_frame_count() const {
+    int n = 0;
+    for (const motion::Motion& m : chars_) n = std::max(n, m.frame_count());
+    return n;
+  }
+
+  // A frame_offset: within -(n-1)..n-1 for a clip of n frames, as a larger one moves every frame
+  // outside the clip (and could overflow int when added to a frame).
+  int offset_frames(const YAML::Node& n, const std::string& what, int character) const {
+    const int off = integer(n, what);
+    const long long most = std::max(frame_count(character) - 1, 0);
+    if (off < -most || off > most)
+      fail(what + ": " + std::to_string(off) + " is outside -" + std::to_string(most) + ".." +
+               std::to_string(most) + " (the clip has frames 0.." +
+               std::to_string(frame_count(character) - 1) + ")",
+           n.Mark());
+    return off;
+  }
+
   int time_to_frame(const YAML::Node& n, const std::string& what) const {
     const double t = as_double(n, what);
     if (!std::isfinite(t) || t < 0) fail(what + ": a time must be finite and >= 0 s", n.Mark());
-    return static_cast<int>(std::lround(t * chars_.front().fps));
+    // Against the longest clip: a frame_offset may move the frame into another character's clip,
+    // and the frames are checked against each character's own clip once the offsets are added.
+    try {
+      return motion::seconds_to_frame(t, chars_.front().fps, max_frame_count());
+    } catch (const std::out_of_range& e) {
+      fail(what + ": " + e.what(), n.Mark());
+    }
   }
 
   // The sample base frames of an entry: exactly one of frames / at_frames / times / at_times.
@@ -202,6 +231,11 @@ class Reader : public kg::YamlReader {
                  "] is reversed",
              n.Mark());
       const int a = frames[0], b = frames[1];
+      if (static_cast<long long>(b) - a >= max_frame_count())
+        fail(what + ": the range [" + std::to_string(a) + ", " + std::to_string(b) +
+                 "] is outside the clip (frames 0.." + std::to_string(max_frame_count() - 1) +
+                 "): longer than its " + std::to_string(max_frame_count()) + " frames",
+             n.Mark());
       frames.clear();
       for (int f = a; f <= b; ++f) frames.push_back(f);
     } else if (frames.empty()) {
@@ -254,31 +288,33 @@ class Reader : public kg::YamlReader {
                                     : n["times"]     ? n["times"]
                                                      : n["at_times"])
                                        .Mark();
+    // Every read frame inside its character's clip: base frame + offset summed in long long and
+    // checked before it is narrowed to int.
+    const std::size_t np = c.points.size();
+    auto frame_at = [&](int base, std::size_t entry) {
+      const long long f = static_cast<long long>(base) + offsets[entry];
+      const int character = entry < np ? c.points[entry].character : c.channels[entry - np].character;
+      if (f < 0 || f >= frame_count(character))
+        fail(path + ": frame " + std::to_string(f) + " is outside the clip (frames 0.." +
+                 std::to_string(frame_count(character) - 1) +
+                 (chars_.size() > 1 ? " of character " + std::to_string(character) : "") + ")",
+             frames_mark);
+      return static_cast<int>(f);
+    };
     // same_place with one point: the point at consecutive sample frames (non-skid).
     if (c.kind == "same_place" && c.points.size() == 1 && c.channels.empty()) {
-      c.points.push_back(c.points.front());
       if (frames.size() < 2)
         fail(path + ": same_place with one point needs at least two frames", frames_mark);
       for (std::size_t i = 0; i + 1 < frames.size(); ++i)
-        c.samples.push_back({.frames = {frames[i] + offsets[0], frames[i + 1] + offsets[0]}});
+        c.samples.push_back({.frames = {frame_at(frames[i], 0), frame_at(frames[i + 1], 0)}});
+      c.points.push_back(c.points.front());
     } else {
       for (int f : frames) {
         Sample s;
-        for (int off : offsets) s.frames.push_back(f + off);
+        for (std::size_t e = 0; e < offsets.size(); ++e) s.frames.push_back(frame_at(f, e));
         c.samples.push_back(std::move(s));
       }
     }
-    // Every read frame inside its character's clip.
-    const std::size_t np = c.points.size();
-    for (const Sample& s : c.samples)
-      for (std::size_t i = 0; i < s.frames.size(); ++i) {
-        const int character = i < np ? c.points[i].character : c.channels[i - np].character;
-        if (s.frames[i] < 0 || s.frames[i] >= frame_count(character))
-          fail(path + ": frame " + std::to_string(s.frames[i]) + " is outside the clip (frames 0.." +
-                   std::to_string(frame_count(character) - 1) +
-                   (chars_.size() > 1 ? " of character " + std::to_string(character) : "") + ")",
-               frames_mark);
-      }
     if (const ConstraintKind* kind = builtin_.find(c.kind)) {
       try {
         kind->check(c);

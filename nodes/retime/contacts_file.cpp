@@ -2,12 +2,14 @@
 // file:line:column with the dotted key path.
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
 
 #include "kg/base/atomic_file.hpp"
 #include "kg/base/error.hpp"
 #include "kg/base/yaml_reader.hpp"
+#include "kg/motion/frame_time.hpp"
 #include "kg/retime/contacts.hpp"
 
 namespace kg::retime {
@@ -89,7 +91,11 @@ class Reader : public kg::YamlReader {
       if (seconds) {
         const double t = number(x, what);
         if (t < 0) fail(what + ": a time must be >= 0 s", x.Mark());
-        ends[i] = static_cast<int>(std::lround(t * motion_.fps));
+        try {
+          ends[i] = motion::seconds_to_frame(t, motion_.fps, motion_.frame_count());
+        } catch (const std::out_of_range& e) {
+          fail(what + ": " + e.what(), x.Mark());
+        }
       } else {
         ends[i] = integer(x, what);
       }

@@ -774,6 +774,13 @@ TEST_CASE("amc: malformed inputs fail with file:line and what was expected", "[i
        "a number for root.ry, got 'x'"},
       {"infinite value", replaced(kAmc, "ltibia 20", "ltibia inf"), 7, "a number for ltibia.rx, got 'inf'"},
       {"frame without bones", kAmc + "3\n", 13, "bone 'root' in frame 3 (begun at line 12), got end of file"},
+      // Fuzzing (issue 13): number + 1 overflowed, and the next frame then read 'expected frame number
+      // -9223372036854775808'.
+      {"frame number at the long long limit", replaced(kAmc, "1\nroot", "9223372036854775807\nroot"), 4,
+       "expected a frame number 0..2147483647, got '9223372036854775807'"},
+      {"frame number past int", replaced(kAmc, "1\nroot", "2147483648\nroot"), 4,
+       "expected a frame number 0..2147483647, got '2147483648'"},
+      {"negative frame number", replaced(kAmc, "1\nroot", "-1\nroot"), 4, "a frame number, got '-1'"},
   };
   for (const Case& c : cases) {
     INFO(c.what);

@@ -265,3 +265,21 @@ TEST_CASE("import options: fps overrides a lying header (16_01.bvh is 120 fps, s
   CHECK(header.motion.fps == Approx(30.0003));
   CHECK(!contains(header.notes, "fps"));
 }
+
+TEST_CASE("import options: a BVH of zero frames scales its skeleton and has no values to scale") {
+  // Fuzzing (issue 13): scaling the position columns of a 0-frame clip made Eigen offset the
+  // row-major matrix's null data pointer (undefined behaviour under -fsanitize=undefined).
+  const std::string text =
+      "HIERARCHY\nROOT hip\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation "
+      "Xrotation Yrotation\n  End Site\n  {\n    OFFSET 0 170 0\n  }\n}\nMOTION\nFrames: 0\nFrame Time: "
+      "0.0333333\n";
+  auto clip = parse_bvh(text, "empty.bvh");
+  REQUIRE(clip.motion.frame_count() == 0);
+  kg::motion::Motion m = clip.motion;
+  auto notes = apply_import_options(m, {.units = "cm", .up = "y"}, 1.0 / clip.frame_time, "empty.bvh");
+  INFO(all(notes));
+  CHECK(m.frame_count() == 0);
+  CHECK(m.values.cols() == 6);
+  CHECK(m.skeleton->joint(0).end_sites[0].isApprox(Eigen::Vector3d(0, 1.7, 0)));
+  CHECK(m.fps == Approx(30.0).epsilon(1e-5));
+}

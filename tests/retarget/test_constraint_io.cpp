@@ -219,6 +219,27 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
       {"version: 1\nlimits:\n  \"Hips\": {Xrotation: [10, 1]}\n", "expected [min, max] with min <= max"},
       {"version: 1\nlimits:\n  \"Hips\": {Xrot: [0, 1]}\n", "unknown channel 'Xrot'"},
       {"version: 1\nconstraints: [\n", "c.yaml:"},
+      // Fuzzing (issue 13): numbers that overflowed int or wrapped into the clip.
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot, frame_offset: "
+       "2147483647}]\n"
+       "    params: [0, 0, 0]\n    frames: [0, 1]\n",
+       "c.yaml:4:46: constraints[0].points[0].frame_offset: 2147483647 is outside -"},
+      {"version: 1\nconstraints:\n  - kind: parameter_range\n"
+       "    channels: [{joint: LeftLeg, channel: Xrotation, frame_offset: -2147483648}]\n"
+       "    params: [0, 1]\n    frames: [0, 1]\n",
+       "c.yaml:4:67: constraints[0].channels[0].frame_offset: -2147483648 is outside -"},
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n"
+       "    params: [0, 0, 0]\n    at_times: [1e300]\n",
+       "c.yaml:6:16: constraints[0].at_times: 1e+300 s is outside the clip (0.."},
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n"
+       "    params: [0, 0, 0]\n    times: [35791394.2, 35791394.3]\n",
+       "c.yaml:6:13: constraints[0].times: 35791394.2 s is outside the clip (0.."},
+      {"version: 1\nconstraints:\n  - kind: position\n    points: [{joint: LeftFoot}]\n"
+       "    params: [0, 0, 0]\n    frames: [0, 2147483647]\n",
+       "c.yaml:6:13: constraints[0].frames: the range [0, 2147483647] is outside the clip (frames 0.."},
+      {"version: 1\nconstraints:\n  - kind: same_place\n    points: [{joint: LeftFoot, frame_offset: -1}]\n"
+       "    at_frames: [-2147483648, 0]\n",
+       "c.yaml:5:16: constraints[0]: frame -2147483649 is outside the clip (frames 0.."},
       {"", "empty constraint file"},
   };
   for (const Case& c : cases) {

@@ -426,7 +426,17 @@ patches:
         {"version: 1\n" + patch + "    times: [-1, 0.5]\n", "patches[0].times: a time must be >= 0 s",
          "bad.yaml:5:13"},
         {"version: 1\n" + patch + "    times: [0, 3]\n",
-         "patches[0].times: frames [0, 90] are outside the clip", "bad.yaml:5:12"},
+         "patches[0].times: 3 s is outside the clip (0..1.96667 s, frames 0..59 at 30 fps)", "bad.yaml:5:16"},
+        {"version: 1\n" + patch + "    times: [3.0, 3.1]\n", "patches[0].times: 3 s is outside the clip",
+         "bad.yaml:5:13"},
+        // Fuzzing (issue 13): times whose frame overflowed int through lround and wrapped into the clip.
+        {"version: 1\n" + patch + "    times: [35791394.2, 35791394.3]\n",
+         "patches[0].times: 35791394.2 s is outside the clip (0..1.96667 s, frames 0..59 at 30 fps)",
+         "bad.yaml:5:13"},
+        {"version: 1\n" + patch + "    times: [1e300, 1e300]\n",
+         "patches[0].times: 1e+300 s is outside the clip", "bad.yaml:5:13"},
+        {"version: 1\n" + patch + "    times: [0, 1.99]\n", "patches[0].times: 1.99 s is outside the clip",
+         "bad.yaml:5:16"},
         {"version: 1\n" + patch + "    frames: [0, 5]\n" +
              "  - joint: lhand\n    vertices: [[0, 0, 0]]\n    frames: [0, 5]\n",
          "patches[1].name: a patch named 'lhand' is already defined (name the patches apart)",

@@ -35,14 +35,20 @@ struct BvhClip {
   double frame_time = 0;  // seconds per frame, as the header's "Frame Time:" says
 };
 
+// The frame times parse_bvh accepts, in seconds: 1 microsecond (1e6 fps) to an hour per frame,
+// so 1 / frame_time is a finite, sane frame rate.
+inline constexpr double kBvhMinFrameTime = 1e-6;
+inline constexpr double kBvhMaxFrameTime = 3600;
+
 // Parses BVH text. `file_name` only names the file in error messages and gives motion.name.
 // Accepts: any channel order and count (0..6, no channel twice) per joint, position channels
 // on any joint, End Sites, several ROOTs, LF or CRLF line ends, blanks and tabs, keywords and
 // channel names in any letter case, a UTF-8 BOM. Refuses (kg::Error): missing
 // HIERARCHY/ROOT/MOTION/Frames:/Frame Time:, unknown or repeated channel names, CHANNELS n not
 // followed by exactly n names on its line, unbalanced braces, a non-numeric, NaN or infinite
-// number, a frame time <= 0, a frame line with too few or too many values, fewer frame lines
-// than "Frames:" says or anything but blanks after the last one, duplicate joint names.
+// number, a frame time outside kBvhMinFrameTime..kBvhMaxFrameTime, a frame line with too few or too many
+// values, fewer frame lines than "Frames:" says or anything but blanks after the last one, duplicate joint
+// names.
 BvhClip parse_bvh(std::string_view text, const std::string& file_name);
 
 // Reads the whole file at once and parses it; an unreadable file throws kg::Error
