@@ -28,7 +28,8 @@ std::string fmt_vector(const Eigen::Vector3d& v) {
   return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " + std::to_string(v.z()) + ")";
 }
 
-void check_joint(const Joint& joint, int joint_count, const std::vector<Joint>& existing) {
+// `name_taken`: whether another joint already has joint.name.
+void check_joint(const Joint& joint, int joint_count, bool name_taken) {
   const std::string who = "joint '" + joint.name + "'";
   if (joint.name.empty())
     throw std::invalid_argument("joint " + std::to_string(joint_count) + " has no name");
@@ -36,8 +37,7 @@ void check_joint(const Joint& joint, int joint_count, const std::vector<Joint>& 
     throw std::invalid_argument(who + ": parent " + std::to_string(joint.parent) +
                                 " does not exist (expected -1 or 0.." + std::to_string(joint_count - 1) +
                                 ")");
-  for (const Joint& other : existing)
-    if (other.name == joint.name) throw std::invalid_argument(who + ": duplicate joint name");
+  if (name_taken) throw std::invalid_argument(who + ": duplicate joint name");
   if (!joint.offset.allFinite())
     throw std::invalid_argument(who + ": offset " + fmt_vector(joint.offset) + " is not finite");
   if (!joint.axis.allFinite() ||
@@ -78,17 +78,24 @@ std::optional<ChannelKind> channel_kind_from_string(const std::string& bvh_name)
 }
 
 int Skeleton::add_joint(Joint joint) {
-  check_joint(joint, joint_count(), joints_);
+  check_joint(joint, joint_count(), index_.contains(joint.name));
+  const int index = joint_count();
   joint.first_channel = channel_count_;
-  channel_count_ += static_cast<int>(joint.channels.size());
+  const int channels = static_cast<int>(joint.channels.size());
   joints_.push_back(std::move(joint));
-  return joint_count() - 1;
+  try {
+    index_.emplace(joints_.back().name, index);
+  } catch (...) {  // out of memory: leave the skeleton as it was
+    joints_.pop_back();
+    throw;
+  }
+  channel_count_ += channels;
+  return index;
 }
 
 int Skeleton::find_joint(const std::string& name) const {
-  for (std::size_t i = 0; i < joints_.size(); ++i)
-    if (joints_[i].name == name) return static_cast<int>(i);
-  return -1;
+  const auto it = index_.find(name);
+  return it == index_.end() ? -1 : it->second;
 }
 
 std::pair<int, int> Skeleton::channel_owner(int channel) const {

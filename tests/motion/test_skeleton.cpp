@@ -121,6 +121,24 @@ TEST_CASE("add_joint refuses bad joints with a message naming them", "[skeleton]
   CHECK(s.channel_count() == 4);
 }
 
+TEST_CASE("the name index follows copies and refused joints, and stays fast on many joints", "[skeleton]") {
+  Skeleton s;
+  s.add_joint(joint("root", -1, {K::Xrotation}));
+  for (int j = 1; j < 200000; ++j) s.add_joint(joint("j" + std::to_string(j), 0, {K::Yrotation}));
+  CHECK_THROWS_WITH(s.add_joint(joint("j199999", 0, {})), "joint 'j199999': duplicate joint name");
+  CHECK_THROWS_WITH(s.add_joint(joint("late", 7, {K::Xrotation, K::Xrotation})),
+                    Catch::Contains("joint 'late': rotation order"));
+  CHECK(s.find_joint("late") == -1);  // a refused joint is not indexed
+  CHECK(s.joint_count() == 200000);
+  CHECK(s.channel_count() == 200000);
+  const Skeleton copy = s;
+  s.add_joint(joint("late", 7, {}));
+  CHECK(s.find_joint("late") == 200000);
+  CHECK(copy.find_joint("late") == -1);
+  CHECK(copy.find_joint("j123456") == 123456);
+  CHECK(copy.find_joint("root") == 0);
+}
+
 TEST_CASE("rest height is the vertical extent of joints and end sites in world Y", "[skeleton]") {
   Skeleton s;
   CHECK(s.rest_height() == 0);

@@ -19,6 +19,7 @@
 #include <limits>
 #include <optional>
 #include <string>
+#include <unordered_map>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -59,15 +60,18 @@ struct Joint {
 class Skeleton {
  public:
   // Appends a joint; its parent must already exist. Sets first_channel. Returns its index.
-  // Throws std::invalid_argument on a bad parent or a duplicate name.
+  // Throws std::invalid_argument on a bad parent or a duplicate name. Constant time on average
+  // (names are kept in a hash index), so building a skeleton is linear in its joints.
   int add_joint(Joint joint);
 
   const std::vector<Joint>& joints() const { return joints_; }
   const Joint& joint(int index) const { return joints_[static_cast<std::size_t>(index)]; }
+  // For editing offsets, axes, limits and end sites; a joint's name is indexed by add_joint and
+  // must not be changed through this.
   Joint& joint_mut(int index) { return joints_[static_cast<std::size_t>(index)]; }
   int joint_count() const { return static_cast<int>(joints_.size()); }
   int channel_count() const { return channel_count_; }
-  // -1 when absent.
+  // -1 when absent. Constant time on average.
   int find_joint(const std::string& name) const;
   // The joint owning frame channel `channel`, and that channel's index within the joint.
   std::pair<int, int> channel_owner(int channel) const;
@@ -85,6 +89,7 @@ class Skeleton {
 
  private:
   std::vector<Joint> joints_;
+  std::unordered_map<std::string, int> index_;  // joint name -> index in joints_
   int channel_count_ = 0;
 };
 
