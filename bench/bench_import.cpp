@@ -18,25 +18,15 @@
 #include <string>
 #include <vector>
 
+#include "bench_timing.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace {
 
+using kg::bench::best_seconds;
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
-
-template <class F>
-double best_seconds(int runs, F&& f) {
-  double best = std::numeric_limits<double>::infinity();
-  for (int r = 0; r < runs; ++r) {
-    const auto t0 = Clock::now();
-    f();
-    best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
-  }
-  return best;
-}
 
 // Forward kinematics of every frame; returns a sum of positions so the work cannot be elided.
 double all_fk(const kg::motion::Motion& m, std::vector<Eigen::Isometry3d>& world) {

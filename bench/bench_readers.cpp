@@ -16,26 +16,16 @@
 
 #include <unistd.h>
 
+#include "bench_timing.hpp"
 #include "kg/base/atomic_file.hpp"
 #include "kg/io/bvh.hpp"
 
 namespace {
 
+using kg::bench::best_seconds;
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 constexpr int kFrames = 3;
-
-template <class F>
-double best_seconds(int runs, F&& f) {
-  double best = std::numeric_limits<double>::infinity();
-  for (int r = 0; r < runs; ++r) {
-    const auto t0 = Clock::now();
-    f();
-    best = std::min(best, std::chrono::duration<double>(Clock::now() - t0).count());
-  }
-  return best;
-}
 
 // A root with `joints` - 1 sibling children, each with three rotation channels and an End Site.
 std::string sibling_bvh(int joints) {
