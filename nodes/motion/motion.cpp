@@ -1,6 +1,8 @@
 #include "kg/motion/motion.hpp"
 #include "kg/motion/frame_time.hpp"
 
+#include "kg/base/text.hpp"
+
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -45,13 +47,11 @@ int seconds_to_frame(double seconds, double fps, int frame_count) {
   const double f = seconds * fps;  // in double: no cast before the range check
   // Rounds into 0..frame_count-1: -0.5 < f < frame_count - 0.5 (lround rounds halves away from 0).
   if (!(std::isfinite(f) && f > -0.5 && f < frame_count - 0.5)) {
-    std::ostringstream s;
-    s.precision(10);  // a time that wrapped to a frame as in 35791394.2 s shows whole
-    s << seconds;
-    s.precision(6);
-    s << " s is outside the clip (0.." << (frame_count > 1 ? (frame_count - 1) / fps : 0.0)
-      << " s, frames 0.." << frame_count - 1 << " at " << fps << " fps)";
-    throw std::out_of_range(s.str());
+    // Ten digits: a time that wrapped to a frame, as 35791394.2 s did, shows whole.
+    throw std::out_of_range(text::significant(seconds, 10) + " s is outside the clip (0.." +
+                            text::significant(frame_count > 1 ? (frame_count - 1) / fps : 0.0) +
+                            " s, frames 0.." + std::to_string(frame_count - 1) + " at " +
+                            text::significant(fps) + " fps)");
   }
   return static_cast<int>(std::lround(f));
 }
