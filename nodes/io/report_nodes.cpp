@@ -3,10 +3,10 @@
 #include <memory>
 #include <string>
 
-#include "kg/base/atomic_file.hpp"
 #include "kg/base/report.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/node.hpp"
+#include "kg/graph/sink.hpp"
 
 namespace kg {
 namespace {
@@ -17,17 +17,11 @@ class WriteReportNode final : public graph::Node {
 
   void run(graph::RunContext& ctx) const override {
     const Report& report = ctx.input<Report>("report");
-    if (path_.empty()) {
-      ctx.log("no path: nothing written");
-      ctx.report("written", false);
-      return;
-    }
     // The document's text and a blank line, as the project's reports have always ended.
-    kg::write_file_atomically(path_, [&](std::ostream& os) {
+    graph::write_sink_file(ctx, path_, [&](std::ostream& os) {
       report.write(os);
       os << '\n';
     });
-    ctx.report("written", true);
   }
 
  private:
@@ -44,10 +38,7 @@ graph::NodeType write_report_type() {
           "two spaces, numbers in their shortest exact form, then a blank line. A report its node set before "
           "failing (retime.retime with strict) is written all the same, saying why.",
       .inputs = {{"report", "kg.Report", true, "the document"}},
-      .params = {{.name = "path",
-                  .type = graph::ParamType::OutputPath,
-                  .default_value = std::string(),
-                  .doc = "the .json file; \"\" writes none (logged)"}},
+      .params = {graph::sink_path_param("the .json file; \"\" writes none (logged)")},
       .side_effects = true};
   return {std::move(spec), [](const graph::Params& p) { return std::make_unique<WriteReportNode>(p); }};
 }

@@ -8,9 +8,9 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "kg/base/atomic_file.hpp"
 #include "kg/base/json.hpp"
 #include "kg/builtin_nodes.hpp"
+#include "kg/graph/sink.hpp"
 #include "kg/retime/contacts.hpp"
 #include "kg/retime/dynamics.hpp"
 #include "kg/retime/hulls.hpp"
@@ -28,6 +28,8 @@ using graph::Params;
 using graph::ParamSpec;
 using graph::ParamType;
 using graph::RunContext;
+using graph::sink_path_param;
+using graph::write_sink_file;
 
 std::string shown(double x) {
   std::ostringstream out;
@@ -518,23 +520,6 @@ NodeType retime_node_type() {
            .doc = "fail (non-zero exit, no motion or warp; the report only, saying why) when "
                   "an output frame lies outside its hull"}}};
   return {std::move(spec), [](const Params& p) { return std::make_unique<RetimeNode>(p); }};
-}
-
-// A sink's `path` param: where it writes; "" writes nothing (a graph variable left empty).
-ParamSpec sink_path_param(const std::string& doc) {
-  return {.name = "path", .type = ParamType::OutputPath, .default_value = std::string(), .doc = doc};
-}
-
-// Writes `write`'s text to the node's path atomically; with no path, says that nothing was written.
-void write_sink_file(RunContext& ctx, const std::string& path,
-                     const std::function<void(std::ostream&)>& write) {
-  if (path.empty()) {
-    ctx.log("no path: nothing written");
-    ctx.report("written", false);
-    return;
-  }
-  kg::write_file_atomically(path, write);
-  ctx.report("written", true);
 }
 
 class WriteCurvesNode final : public graph::Node {
