@@ -1,4 +1,5 @@
 #include "kg/base/atomic_file.hpp"
+#include "kg/base/text.hpp"
 
 #include "kg/base/error.hpp"
 
@@ -90,6 +91,24 @@ WrittenFiles& written() {
   return files;
 }
 
+// Refuses text in UTF-16 or UTF-32 (by its byte-order mark); drops a UTF-8 byte-order mark.
+void check_encoding(std::string& text, const std::string& path, const std::string& what) {
+  const auto starts = [&](std::string_view mark) {
+    return std::string_view(text).substr(0, mark.size()) == mark;
+  };
+  using namespace std::string_view_literals;
+  for (const auto& [mark, encoding] :
+       {std::pair{"\xff\xfe\0\0"sv, "UTF-32 (little-endian)"},
+        std::pair{"\0\0\xfe\xff"sv, "UTF-32 (big-endian)"}, std::pair{"\xff\xfe"sv, "UTF-16 (little-endian)"},
+        std::pair{"\xfe\xff"sv, "UTF-16 (big-endian)"}}) {
+    if (starts(mark))
+      throw Error(what + " is " + encoding + " text (its first bytes are the byte-order mark " +
+                      text::excerpt(mark) + "); expected UTF-8 or ASCII: save it as UTF-8",
+                  {path, 1, 1});
+  }
+  if (starts("\xef\xbb\xbf")) text.erase(0, 3);
+}
+
 void remove_quietly(const fs::path& p) {
   std::error_code ec;
   fs::remove(p, ec);
@@ -103,14 +122,16 @@ std::string read_input_file(const fs::path& path, const std::string& what) {
   if (fs::is_directory(path, ec)) throw Error(what + " expected, got a directory", {path.string()});
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
-  std::ostringstream text;
-  text << in.rdbuf();
+  std::ostringstream stream;
+  stream << in.rdbuf();
   if (in.bad()) throw Error("cannot read " + what, {path.string()});
+  std::string text = std::move(stream).str();
+  check_encoding(text, path.string(), what);
   const fs::path canonical = fs::weakly_canonical(path, ec);
   InputFiles& files = input_files();
   const std::lock_guard<std::mutex> lock(files.mutex);
   files.paths.insert(ec ? path : canonical);
-  return std::move(text).str();
+  return text;
 }
 
 bool is_input_file(const fs::path& path) {

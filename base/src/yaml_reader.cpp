@@ -6,10 +6,94 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <unordered_map>
 
 namespace kg {
 
 namespace {
+
+SourceLocation located(const std::string& path, const YAML::Mark& m) {
+  return m.line < 0 ? SourceLocation{path} : SourceLocation{path, m.line + 1, m.column + 1};
+}
+
+// Walks each distinct node of a document once: an alias is the very node it names, found again
+// by its mark (and confirmed with Node::is, since a flow map used as the first key of a block map
+// starts where that map starts). Counts the document's distinct nodes and its nodes as a reader
+// walking it would meet them (aliases expanded), and refuses duplicate keys.
+class DocumentCheck {
+ public:
+  explicit DocumentCheck(const std::string& path) : path_(path) {}
+
+  void run(const YAML::Node& root) {
+    const long long expanded = walk(root);
+    if (expanded > distinct_ + kMaxYamlAliasGrowth)
+      throw Error("aliases expand this document from " + std::to_string(distinct_) + " to over " +
+                      std::to_string(distinct_ + kMaxYamlAliasGrowth) + " nodes (at most " +
+                      std::to_string(kMaxYamlAliasGrowth) + " more nodes through aliases)",
+                  located(path_, root.Mark()));
+  }
+
+ private:
+  static constexpr long long kCap = 1LL << 60;  // expanded counts saturate here
+
+  long long walk(const YAML::Node& n) {
+    if (!n.IsMap() && !n.IsSequence()) {
+      ++distinct_;  // an aliased scalar counts again; only collections can multiply a document
+      return 1;
+    }
+    auto& seen = seen_[n.Mark().pos];
+    for (const auto& [node, count] : seen)
+      if (node.is(n)) return count;
+    ++distinct_;
+    long long count = 1;
+    if (n.IsMap()) {
+      std::unordered_map<std::string, YAML::Mark> keys;
+      std::size_t i = 0;
+      for (auto it = n.begin(); it != n.end(); ++it, ++i) {
+        if (it->first.IsScalar()) {
+          const auto [first, inserted] = keys.emplace(it->first.Scalar(), it->first.Mark());
+          if (!inserted)
+            throw Error("duplicate key " + text::in_quotes(text::excerpt(it->first.Scalar())) + " " +
+                            where() + " (first at " + located(path_, first->second).to_string() + ")",
+                        located(path_, it->first.Mark()));
+          path_keys_.push_back({it->first.Scalar(), -1});
+        } else {
+          path_keys_.push_back({"", static_cast<long long>(i)});
+        }
+        count = std::min(kCap, count + walk(it->first) + walk(it->second));
+        path_keys_.pop_back();
+      }
+    } else {
+      long long i = 0;
+      for (auto it = n.begin(); it != n.end(); ++it, ++i) {
+        path_keys_.push_back({"", i});
+        count = std::min(kCap, count + walk(*it));
+        path_keys_.pop_back();
+      }
+    }
+    seen_[n.Mark().pos].push_back({n, count});
+    return count;
+  }
+
+  // "at the top level", "in nodes.a.params", "in constraints[2]": where the walk is.
+  std::string where() const {
+    if (path_keys_.empty()) return "at the top level";
+    std::string out = "in ";
+    for (const auto& [key, index] : path_keys_) {
+      if (index >= 0) {
+        out += "[" + std::to_string(index) + "]";
+      } else {
+        out += (out.size() == 3 ? "" : ".") + text::excerpt(key);
+      }
+    }
+    return out;
+  }
+
+  const std::string& path_;
+  long long distinct_ = 0;
+  std::unordered_map<int, std::vector<std::pair<YAML::Node, long long>>> seen_;
+  std::vector<std::pair<std::string, long long>> path_keys_;  // key, or index of a list item
+};
 
 std::string shown(double v) {
   std::ostringstream s;
@@ -34,15 +118,19 @@ void YamlReader::fail(const std::string& message, const YAML::Mark& m) const {
               m.line < 0 ? SourceLocation{path_, 0, 0} : SourceLocation{path_, m.line + 1, m.column + 1});
 }
 
-YAML::Node YamlReader::load(std::string_view text, const std::string& empty_message) const {
+YAML::Node parse_yaml(std::string_view text, const std::string& path) {
   YAML::Node root;
   try {
     root = YAML::Load(std::string(text));
   } catch (const YAML::Exception& e) {
-    const YAML::Mark m = e.mark;
-    throw Error("malformed YAML: " + e.msg,
-                m.line < 0 ? SourceLocation{path_} : SourceLocation{path_, m.line + 1, m.column + 1});
+    throw Error("malformed YAML: " + e.msg, located(path, e.mark));
   }
+  DocumentCheck(path).run(root);
+  return root;
+}
+
+YAML::Node YamlReader::load(std::string_view text, const std::string& empty_message) const {
+  YAML::Node root = parse_yaml(text, path_);
   if (!root.IsDefined() || root.IsNull()) throw Error(empty_message, {path_, 1, 1});
   return root;
 }
@@ -52,13 +140,7 @@ std::vector<YamlReader::Entry> YamlReader::entries(const YAML::Node& map, const 
   std::vector<Entry> out;
   for (auto it = map.begin(); it != map.end(); ++it) {
     if (!it->first.IsScalar()) fail("a key of " + what + " must be a plain text", it->first);
-    Entry e{it->first.Scalar(), it->first, it->second};
-    for (const Entry& prior : out)
-      if (prior.key == e.key)
-        fail("duplicate key " + text::in_quotes(e.key) + " in " + what + " (first at " +
-                 at(prior.key_node).to_string() + ")",
-             e.key_node);
-    out.push_back(std::move(e));
+    out.push_back({it->first.Scalar(), it->first, it->second});
   }
   return out;
 }

@@ -4,6 +4,7 @@
 #include "kg/graph/yaml_io.hpp"
 
 #include "kg/base/atomic_file.hpp"
+#include "kg/base/yaml_reader.hpp"
 
 #include <yaml-cpp/yaml.h>
 
@@ -84,12 +85,7 @@ class Loader {
   }
 
   YAML::Node parse(const std::string& text) const {
-    YAML::Node root;
-    try {
-      root = YAML::Load(text);
-    } catch (const YAML::Exception& e) {
-      fail("malformed YAML: " + e.msg, at(e.mark));
-    }
+    const YAML::Node root = parse_yaml(text, file_);
     if (!root.IsDefined() || root.IsNull())
       fail("empty graph file (expected at least 'version: 1' and 'nodes:')", {file_, 1, 1});
     if (!root.IsMap())
@@ -98,23 +94,15 @@ class Loader {
     return root;
   }
 
-  // The entries of `map` (a map or null) in file order; a key given twice is an error.
-  std::vector<Entry> entries(const YAML::Node& map, const std::string& path, const char* what = "key") const {
+  // The entries of `map` (a map or null) in file order (parse_yaml has refused duplicate keys).
+  std::vector<Entry> entries(const YAML::Node& map, const std::string& path) const {
     std::vector<Entry> out;
     if (map.IsNull()) return out;
     if (!map.IsMap()) fail(text::in_quotes(path) + " must be a map, got " + kind_of(map), at(map));
     for (auto it = map.begin(); it != map.end(); ++it) {
       if (!it->first.IsScalar())
         fail("a key of " + text::in_quotes(path) + " must be a plain name", at(it->first));
-      Entry e{it->first.Scalar(), it->first, it->second};
-      for (const Entry& prior : out)
-        if (prior.key == e.key) {
-          const std::string name = std::string(what) == "key" ? path + "." + e.key : e.key;
-          fail(std::string("duplicate ") + what + " " + text::in_quotes(name) + " (first at " +
-                   at(prior.key_node).to_string() + ")",
-               at(e.key_node));
-        }
-      out.push_back(std::move(e));
+      out.push_back({it->first.Scalar(), it->first, it->second});
     }
     return out;
   }
@@ -187,7 +175,7 @@ class Variables {
   // Replaces ${name} by the variable's value and $$ by $. `where` locates `text` for messages.
   std::string substitute(const std::string& text, const SourceLocation& where) const {
     return substitute_with(text, where,
-                           [&](const std::string& name, const SourceLocation& at) -> std::string {
+                           [&](const std::string& name, const SourceLocation& at) -> const std::string& {
                              auto it = values_.find(name);
                              if (it != values_.end()) return it->second;
                              undefined(name, at);
@@ -195,7 +183,7 @@ class Variables {
   }
 
  private:
-  using Lookup = std::function<std::string(const std::string&, const SourceLocation&)>;
+  using Lookup = std::function<const std::string&(const std::string&, const SourceLocation&)>;
 
   [[noreturn]] void undefined(const std::string& name, const SourceLocation& at) const {
     std::string message = "undefined variable " + text::in_quotes(name) + did_you_mean(name, names());
@@ -225,14 +213,22 @@ class Variables {
       }
       const std::size_t close = text.find('}', i + 2);
       if (close == std::string::npos)
-        loader_.fail("unterminated '${' in " + text::in_quotes(text) + " (write $$ for a literal dollar)",
+        loader_.fail("unterminated '${' in " + text::in_quotes(text::excerpt(text)) +
+                         " (write $$ for a literal dollar)",
                      where);
       const std::string name = text.substr(i + 2, close - i - 2);
       if (!is_identifier(name, false))
-        loader_.fail("bad variable reference '${" + name + "}' in " + text::in_quotes(text) +
+        loader_.fail("bad variable reference " + text::in_quotes("${" + text::excerpt(name) + "}") + " in " +
+                         text::in_quotes(text::excerpt(text)) +
                          ": a name has letters, digits and '_' (write $$ for a literal dollar)",
                      where);
-      out += lookup(name, where);
+      const std::string& value = lookup(name, where);
+      if (out.size() + value.size() > kMaxExpandedBytes)
+        loader_.fail("expanding " + text::in_quotes(text::excerpt(text)) + " gives over " +
+                         std::to_string(kMaxExpandedBytes) + " bytes (the limit of a text after " +
+                         "${...} expansion) at ${" + name + "} (" + std::to_string(value.size()) + " bytes)",
+                     where);
+      out += value;
       i = close;
     }
     return out;
@@ -256,7 +252,9 @@ class Variables {
     resolving_.push_back(name);
     std::string value =
         substitute_with(v->default_value, v->where,
-                        [&](const std::string& n, const SourceLocation& at) { return value_of(n, at); });
+                        [&](const std::string& n, const SourceLocation& at) -> const std::string& {
+                          return value_of(n, at);
+                        });
     resolving_.pop_back();
     return values_[name] = std::move(value);
   }
@@ -289,7 +287,7 @@ std::optional<bool> parse_bool(std::string text) {
 Head read_declarations(const Loader& L, Variables& vars, const std::string& text) {
   Head h;
   h.root = L.parse(text);
-  h.top = L.entries(h.root, "", "top-level key");
+  h.top = L.entries(h.root, "");
 
   // The version first: a file of another version may well have other keys.
   const Entry* version = Loader::find(h.top, "version");
@@ -309,7 +307,7 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
   if (const Entry* doc = Loader::find(h.top, "doc")) h.doc = L.scalar(*doc, "'doc'");
 
   if (const Entry* vs = Loader::find(h.top, "variables")) {
-    for (const Entry& e : L.entries(vs->value, "variables", "variable")) {
+    for (const Entry& e : L.entries(vs->value, "variables")) {
       const std::string path = "variables." + e.key;
       if (!is_identifier(e.key, false))
         L.fail("variable name " + text::in_quotes(e.key) +
@@ -650,7 +648,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
            nodes ? L.at(nodes->key_node) : L.at(head.root));
   std::map<std::string, std::size_t> index;
   ParamPlaces places;
-  for (const Entry& e : L.entries(nodes->value, "nodes", "node id")) {
+  for (const Entry& e : L.entries(nodes->value, "nodes")) {
     const std::string path = "nodes." + e.key;
     const SourceLocation where = L.at(e.key_node);
     if (!is_identifier(e.key, true))
@@ -689,7 +687,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
     const std::size_t node_index = g.nodes.size();
     if (const Entry* ps = Loader::find(fields, "params")) {
       ParamReader reader(L, vars, node.id, spec);
-      for (const Entry& pe : L.entries(ps->value, path + ".params", "param")) {
+      for (const Entry& pe : L.entries(ps->value, path + ".params")) {
         const ParamSpec* p = spec.find_param(pe.key);
         if (!p) {
           std::vector<std::string> names;

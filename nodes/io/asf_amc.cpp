@@ -1,5 +1,6 @@
 // ASF and AMC parsers (see kg/io/asf_amc.hpp for the mapping onto skeleton.hpp).
 #include "kg/io/asf_amc.hpp"
+#include "kg/base/text.hpp"
 
 #include "kg/base/atomic_file.hpp"
 
@@ -298,6 +299,9 @@ class AsfParser {
       } else if (key == "length") {
         lines_.expect_count(2, "a length unit");
         result_.length_unit = positive_at(1, "a positive length unit");
+        // Beyond these, converting to metres overflows or underflows for any sane bone length.
+        if (result_.length_unit < 1e-6 || result_.length_unit > 1e6)
+          lines_.expected("a length unit in 1e-06..1e+06", 1);
       } else if (key == "angle") {
         lines_.expect_count(2, "an angle unit");
         if (iequals(lines_[1].text, "deg")) {
@@ -459,6 +463,14 @@ class AsfParser {
                     std::string("expected field '") + required + "' in the bone begun at line " +
                         std::to_string(begin_line) + ", got 'end'");
       }
+    }
+    if (!(bone.direction * bone.length).allFinite()) {
+      lines_.fail(seen["length"], 0,
+                  "expected a bone whose direction times length (its offset) is finite, got direction (" +
+                      kg::text::significant(bone.direction.x()) + ", " +
+                      kg::text::significant(bone.direction.y()) + ", " +
+                      kg::text::significant(bone.direction.z()) + ") and length " +
+                      kg::text::significant(bone.length));
     }
     bone_index_[bone.name] = static_cast<int>(bones_.size());
     bones_.push_back(std::move(bone));
@@ -853,6 +865,10 @@ motion::Motion parse_amc(std::string_view text, const std::string& path, const A
       if (translates[static_cast<std::size_t>(b)]) {
         const Joint& j = skeleton.joint(bone.joint);
         const Eigen::Vector3d p = j.offset + j.axis * t;
+        if (!p.allFinite())
+          lines.fail(
+              lines.line(), name.column,
+              "expected translations of bone '" + bone.name + "' whose position is finite, got an overflow");
         for (int k = 0; k < 3; ++k) row[j.first_channel + k] = p[k];
       }
       ++lines_in_frame;

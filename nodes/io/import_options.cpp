@@ -1,4 +1,5 @@
 #include "kg/io/import_options.hpp"
+#include "kg/base/error.hpp"
 #include "kg/base/option_check.hpp"
 
 #include <algorithm>
@@ -92,6 +93,17 @@ Extent frame_extent(const motion::Motion& m, int frame) {
     for (const Eigen::Vector3d& tip : s.joint(j).end_sites) e.add(to_file * (world[j] * tip));
   }
   return e;
+}
+
+// Offsets, end sites and values all finite (converting units can overflow absurd numbers).
+bool lengths_finite(const motion::Skeleton& skeleton, const motion::FrameMatrix& values) {
+  for (int j = 0; j < skeleton.joint_count(); ++j) {
+    const motion::Joint& joint = skeleton.joint(j);
+    if (!joint.offset.allFinite()) return false;
+    for (const Eigen::Vector3d& tip : joint.end_sites)
+      if (!tip.allFinite()) return false;
+  }
+  return values.allFinite();
 }
 
 }  // namespace
@@ -191,7 +203,8 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
     if (declared_metres_per_unit > 0) {
       mpu = declared_metres_per_unit;
       notes.push_back(prefix + "units auto: the file declares " + unit_name(mpu) + " (" + fmt("%.9g", mpu) +
-                      " m per unit); standing height " + fmt("%.3f", height * mpu) + " m");
+                      " m per unit); standing height " +
+                      fmt(std::abs(height * mpu) < 1e4 ? "%.3f" : "%.3g", height * mpu) + " m");
     } else if (!(height > 0)) {
       notes.push_back(prefix + "units auto: the figure has no height along the up axis, taken as m");
     } else {
@@ -206,7 +219,8 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
       mpu = best->metres;
       const double h = height * mpu;
       std::string note = prefix + "units auto: standing height " + fmt("%.4g", height) +
-                         " file units, taken as " + best->name + " (" + fmt("%.2f", h) + " m)";
+                         " file units, taken as " + best->name + " (" +
+                         fmt(std::abs(h) < 1e4 ? "%.2f" : "%.3g", h) + " m)";
       if (h < kPlausibleMin || h > kPlausibleMax)
         note += "; no unit gives a human height of " + fmt("%.1f", kPlausibleMin) + ".." +
                 fmt("%.1f", kPlausibleMax) + " m, this one comes closest: set units if it is wrong";
@@ -236,6 +250,11 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
       }
     }
   }
+
+  if (!lengths_finite(*skeleton, m.values))
+    throw kg::Error("lengths overflow converted to metres (" + fmt("%g", mpu) +
+                        " m per file unit): check the units and the file's numbers",
+                    {file_name});
 
   // Frame rate.
   if (options.fps > 0) {

@@ -33,3 +33,17 @@ TEST_CASE("format_double and parse_double round-trip", "[text]") {
   CHECK_FALSE(text::parse_double("nan").has_value());
   CHECK(text::lower_extension("dir/Walk.BVH") == ".bvh");
 }
+
+TEST_CASE("excerpt: short, escaped, cut at a character", "[text]") {
+  CHECK(text::excerpt("lfoot") == "lfoot");
+  CHECK(text::excerpt("Hüfte") == "Hüfte");                                            // UTF-8 passes through
+  CHECK(text::excerpt(std::string("\xff\xfeH\0I\0", 6)) == "\\xff\\xfeH\\x00I\\x00");  // UTF-16 bytes
+  CHECK(text::excerpt("a\tb\x7f") == "a\\x09b\\x7f");
+  CHECK(text::excerpt("\xc3") == "\\xc3");             // a sequence cut short
+  CHECK(text::excerpt("\xe2\x82x") == "\\xe2\\x82x");  // a continuation missing
+  const std::string long_text(6144, '(');
+  const std::string cut = text::excerpt(long_text);
+  CHECK(cut == std::string(60, '(') + "... (6144 bytes)");
+  CHECK(text::excerpt(long_text, 10).size() < 30);
+  CHECK(text::excerpt("üüü", 3) == "üü... (6 bytes)");  // never half a character
+}

@@ -16,8 +16,10 @@
 
 namespace kg {
 
-// The whole content of `path`, which from now on this process refuses to overwrite. Throws Error
-// located at the file: "no such <what>", "<what> expected, got a directory", "cannot open <what>".
+// The whole content of `path` as text, which from now on this process refuses to overwrite. A
+// UTF-8 byte-order mark is dropped. Throws Error located at the file: "no such <what>", "<what>
+// expected, got a directory", "cannot open <what>"; at file:1:1 for UTF-16 and UTF-32 text (told by
+// its byte-order mark), which every reader here would take for binary.
 std::string read_input_file(const std::filesystem::path& path, const std::string& what);
 
 // Whether `path` names a file read through read_input_file (by any path leading to it).

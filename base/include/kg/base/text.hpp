@@ -42,6 +42,41 @@ inline std::string in_quotes(std::string_view text) {
   return "'" + std::string(text) + "'";
 }
 
+// At most about `max_bytes` of `text` as a message shows what a file holds: control bytes, DEL
+// and bytes that are not UTF-8 as \xNN (so a UTF-16 file or a binary one prints as escapes, never
+// as raw bytes); cut at a character boundary, with "... (N bytes)" telling the whole size.
+inline std::string excerpt(std::string_view text, std::size_t max_bytes = 60) {
+  auto utf8_length = [&](std::size_t i) -> std::size_t {  // 0: not a UTF-8 sequence at i
+    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+    const unsigned char c = byte(i);
+    const std::size_t n = c >= 0xC2 && c <= 0xDF   ? 2
+                          : c >= 0xE0 && c <= 0xEF ? 3
+                          : c >= 0xF0 && c <= 0xF4 ? 4
+                                                   : 0;
+    if (n == 0 || i + n > text.size()) return 0;
+    for (std::size_t k = 1; k < n; ++k)
+      if ((byte(i + k) & 0xC0) != 0x80) return 0;
+    return n;
+  };
+  std::string out;
+  std::size_t i = 0;
+  while (i < text.size() && out.size() < max_bytes) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    const std::size_t n = c >= 0x80 ? utf8_length(i) : 1;
+    if (c < 0x20 || c == 0x7f || n == 0) {
+      char buf[8];
+      std::snprintf(buf, sizeof buf, "\\x%02x", c);
+      out += buf;
+      ++i;
+    } else {
+      out.append(text.substr(i, n));
+      i += n;
+    }
+  }
+  if (i < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
+  return out;
+}
+
 // `items` with `separator` between them ("a, b, c"; "" for none).
 inline std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
   std::string out;

@@ -23,6 +23,15 @@
 
 namespace kg {
 
+// Every YAML text the project reads (graph files and every data file) is parsed here, so that no
+// reader can forget a check: malformed YAML fails at its mark (yaml-cpp also refuses nesting
+// deeper than 2,000); a map giving one key twice fails at the second one, naming the first; and
+// aliases may not make the document larger than its own nodes plus kMaxYamlAliasGrowth nodes (a
+// "billion laughs" of nested aliases is refused before any reader walks it). `path` names the
+// file in messages. Returns a null node for an empty document.
+inline constexpr long long kMaxYamlAliasGrowth = 1'000'000;
+YAML::Node parse_yaml(std::string_view text, const std::string& path);
+
 class YamlReader {
  public:
   explicit YamlReader(std::string path) : path_(std::move(path)) {}
@@ -33,7 +42,7 @@ class YamlReader {
   [[noreturn]] void fail(const std::string& message, const YAML::Node& where) const;
   [[noreturn]] void fail(const std::string& message, const YAML::Mark& where) const;
 
-  // The document; malformed YAML fails at its mark, an empty document with `empty_message`.
+  // The document through parse_yaml; an empty document fails with `empty_message`.
   YAML::Node load(std::string_view text, const std::string& empty_message) const;
 
   struct Entry {
@@ -41,7 +50,7 @@ class YamlReader {
     YAML::Node key_node, value;
   };
   // A map's entries in file order; `what` names the map in messages ("the body file",
-  // "segments.lfemur"). Keys must be scalars and distinct.
+  // "segments.lfemur"). Keys must be scalars (parse_yaml has made them distinct).
   std::vector<Entry> entries(const YAML::Node& map, const std::string& what) const;
   // Refuses keys outside `allowed`, naming the nearest allowed one.
   void check_keys(const std::vector<Entry>& entries, const std::string& what,

@@ -16,7 +16,8 @@
 // involved (unknown key by dotted path, unknown node type with the nearest name, unknown port,
 // type mismatch "expected X, got Y from a.b", unconnected required input, two connections into
 // one input, cycle listed, param of wrong type or out of range, undefined variable, unsupported
-// version, an output path equal to an input path).
+// version, an output path equal to an input path, a text over kMaxExpandedBytes after ${...}
+// expansion). The YAML itself goes through kg::parse_yaml (duplicate keys and alias growth).
 #pragma once
 
 #include <filesystem>
@@ -29,6 +30,9 @@
 namespace kg::graph {
 
 inline constexpr int kGraphFormatVersion = 1;
+// The longest text a variable default or a param may become once its ${...} are replaced
+// (1 MiB): defaults that repeat one another nest exponentially, and are refused at this size.
+inline constexpr std::size_t kMaxExpandedBytes = 1 << 20;
 
 // One `plugins:` entry of a graph file, variables substituted, and where it is written.
 struct PluginEntry {
