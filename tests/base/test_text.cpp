@@ -47,3 +47,9 @@ TEST_CASE("excerpt: short, escaped, cut at a character", "[text]") {
   CHECK(text::excerpt(long_text, 10).size() < 30);
   CHECK(text::excerpt("üüü", 3) == "üü... (6 bytes)");  // never half a character
 }
+
+TEST_CASE("in_quotes escapes and cuts what a file gave", "[text]") {
+  CHECK(text::in_quotes("a\x01"
+                        "b") == "'a\\x01b'");
+  CHECK(text::in_quotes(std::string(6144, 'k')) == "'" + std::string(200, 'k') + "... (6144 bytes)'");
+}

@@ -84,26 +84,30 @@ TEST_CASE("hostile constraint files: huge ranges, offsets and times are refused 
     std::vector<std::string> expected;
   };
   const std::vector<Case> cases = {
-      {"frames [0, 300000000]", "{kind: position, " + point + ", frames: [0, 300000000]}",
+      {"frames [0, 300000000]",
+       "{kind: position, " + point + ", frames: [0, 300000000]}",
        {"c.yaml:3:", "frame"}},
-      {"frames [0, 2147483647]", "{kind: position, " + point + ", frames: [0, 2147483647]}",
+      {"frames [0, 2147483647]",
+       "{kind: position, " + point + ", frames: [0, 2147483647]}",
        {"c.yaml:3:", "frame"}},
       {"frame_offset 2147483647",
        "{kind: position, points: [{joint: " + clip.joint +
            ", frame_offset: 2147483647}], params: [0, 0, 0], frames: [0, 1]}",
        {"c.yaml:3:", "frame_offset"}},
       {"at_times 1e300", "{kind: position, " + point + ", at_times: [1e300]}", {"c.yaml:3:", "1e+300"}},
-      {"a key twice", "{kind: position, points: [{joint: " + clip.joint + ", joint: nosuch}], params: [0, 0, 0], frames: [0, 1]}",
+      {"a key twice",
+       "{kind: position, points: [{joint: " + clip.joint +
+           ", joint: nosuch}], params: [0, 0, 0], frames: [0, 1]}",
        {"c.yaml:3:", "duplicate key 'joint' in constraints[0].points[0]"}},
   };
   for (const Case& c : cases) {
     SECTION(c.name) {
       const fs::path file = dir.write("c.yaml", "version: 1\nconstraints:\n  - " + c.constraint + "\n");
       const fs::path output = dir / "out.bvh";
-      const Result r = bounded_kinegraph({"run", (kSource / "graphs" / "retarget.yaml").string(), "--set",
-                                          "input=" + clip.bvh.string(), "--set", "constraints=" + file.string(),
-                                          "--set", "output=" + output.string(), "--set",
-                                          "report=" + (dir / "m.json").string()});
+      const Result r =
+          bounded_kinegraph({"run", (kSource / "graphs" / "retarget.yaml").string(), "--set",
+                             "input=" + clip.bvh.string(), "--set", "constraints=" + file.string(), "--set",
+                             "output=" + output.string(), "--set", "report=" + (dir / "m.json").string()});
       expect_refused(r, c.expected, output);
     }
   }
@@ -129,13 +133,14 @@ TEST_CASE("hostile graph variables: defaults nesting exponentially are refused a
   CHECK(r.err.size() < 2000);
 }
 
-TEST_CASE("hostile clip files: encodings, absurd numbers and frame times at their place", "[graphs][hostile]") {
+TEST_CASE("hostile clip files: encodings, absurd numbers and frame times at their place",
+          "[graphs][hostile]") {
   TempDir dir;
   const fs::path output = dir / "out.bvh";
   const fs::path convert = kSource / "graphs" / "convert.yaml";
   const auto run = [&](const fs::path& input, const std::vector<std::string>& more = {}) {
-    std::vector<std::string> args{"run", convert.string(), "--set", "input=" + input.string(), "--set",
-                                  "output=" + output.string()};
+    std::vector<std::string> args{"run",   convert.string(),           "--set", "input=" + input.string(),
+                                  "--set", "output=" + output.string()};
     args.insert(args.end(), more.begin(), more.end());
     return bounded_kinegraph(args);
   };
@@ -143,8 +148,9 @@ TEST_CASE("hostile clip files: encodings, absurd numbers and frame times at thei
   SECTION("a UTF-16 BVH") {
     const std::string text("\xff\xfeH\0I\0E\0R\0A\0R\0C\0H\0Y\0\n\0", 22);
     const Result r = run(dir.write("u16.bvh", text));
-    expect_refused(r, {"u16.bvh:1:1: BVH file is UTF-16 (little-endian) text", "mark \\xff\\xfe)", "save it as UTF-8"},
-                   output);
+    expect_refused(
+        r, {"u16.bvh:1:1: BVH file is UTF-16 (little-endian) text", "mark \\xff\\xfe)", "save it as UTF-8"},
+        output);
     CHECK(r.err.find('\xff') == std::string::npos);  // bytes are escaped, never printed raw
   }
   SECTION("Frame Time: 1e-310") {
@@ -177,13 +183,13 @@ TEST_CASE("every YAML reader refuses a key given twice (one shared check)", "[gr
                         "c.yaml", characters),
                     Contains("c.yaml:3:") && Contains("duplicate key 'joint'"));
   const std::string patch = "  - {joint: " + clip.joint + ", vertices: [[0, 0, 0]], frames: [0, 1]}\n";
-  CHECK_THROWS_WITH(
-      kg::retime::read_contacts_string("version: 1\npatches:\n" + patch + "patches:\n" + patch, "k.yaml", clip.motion),
-      Contains("k.yaml:4:1: duplicate key 'patches' at the top level (first at k.yaml:2:1)"));
-  CHECK_THROWS_WITH(kg::retime::read_contacts_string(
-                        "version: 1\npatches:\n  - {joint: " + clip.joint + ", joint: " + clip.joint +
-                            ", vertices: [[0, 0, 0]], frames: [0, 1]}\n",
-                        "k.yaml", clip.motion),
+  CHECK_THROWS_WITH(kg::retime::read_contacts_string("version: 1\npatches:\n" + patch + "patches:\n" + patch,
+                                                     "k.yaml", clip.motion),
+                    Contains("k.yaml:4:1: duplicate key 'patches' at the top level (first at k.yaml:2:1)"));
+  CHECK_THROWS_WITH(kg::retime::read_contacts_string("version: 1\npatches:\n  - {joint: " + clip.joint +
+                                                         ", joint: " + clip.joint +
+                                                         ", vertices: [[0, 0, 0]], frames: [0, 1]}\n",
+                                                     "k.yaml", clip.motion),
                     Contains("k.yaml:3:") && Contains("duplicate key 'joint' in patches[0]"));
 }
 

@@ -37,11 +37,6 @@ inline std::string significant(double x, int digits = 6) {
   return buf;
 }
 
-// 'name': a name or a value quoted in a message.
-inline std::string in_quotes(std::string_view text) {
-  return "'" + std::string(text) + "'";
-}
-
 // At most about `max_bytes` of `text` as a message shows what a file holds: control bytes, DEL
 // and bytes that are not UTF-8 as \xNN (so a UTF-16 file or a binary one prints as escapes, never
 // as raw bytes); cut at a character boundary, with "... (N bytes)" telling the whole size.
@@ -75,6 +70,12 @@ inline std::string excerpt(std::string_view text, std::size_t max_bytes = 60) {
   }
   if (i < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
   return out;
+}
+
+// 'name': a name or a value quoted in a message; what a file gave may be anything, so it is
+// escaped and cut as excerpt does (at 200 bytes: a long path stays whole, a 6 KB key does not).
+inline std::string in_quotes(std::string_view text) {
+  return "'" + excerpt(text, 200) + "'";
 }
 
 // `items` with `separator` between them ("a, b, c"; "" for none).
