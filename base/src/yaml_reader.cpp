@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 namespace kg {
 
@@ -148,6 +149,15 @@ int YamlReader::integer(const YAML::Node& n, const std::string& what) const {
 std::string YamlReader::text(const YAML::Node& n, const std::string& what) const {
   if (!n.IsScalar()) fail(what + ": expected a string", n);
   return n.Scalar();
+}
+
+Pattern YamlReader::pattern(const YAML::Node& n, const std::string& what) const {
+  if (!n.IsScalar()) fail(what + ": expected a regular expression (a string)", n);
+  try {
+    return Pattern::compile(n.Scalar());
+  } catch (const std::invalid_argument& e) {
+    fail(what + ": " + e.what(), n);
+  }
 }
 
 }  // namespace kg

@@ -1,7 +1,7 @@
 // Number <-> text in one place, so params, messages, reports and graph
 // files print and parse numbers alike (shortest text that reads back to the same double); the
-// few significant digits of a message; lists joined for messages; and the file extension files
-// are told apart by.
+// few significant digits of a message; lists joined for messages; text of any length or bytes
+// quoted as a short excerpt; and the file extension files are told apart by.
 #pragma once
 
 #include <algorithm>
@@ -40,6 +40,55 @@ inline std::string significant(double x, int digits = 6) {
 // 'name': a name or a value quoted in a message.
 inline std::string in_quotes(std::string_view text) {
   return "'" + std::string(text) + "'";
+}
+
+// `text` quoted for a message whatever its length and bytes (a user's pattern, the start of a
+// file that is not what it should be): in single quotes like in_quotes, printable ASCII and
+// valid UTF-8 characters as they are, every other byte (controls, DEL, C1 controls, bytes of no
+// valid UTF-8 character) as \xNN; cut after `max_chars` characters (a UTF-8 character counts
+// 1, an escape 4, so the quoted part is at most max_chars columns), the cut marked by
+// "... (N bytes)" after the quotes with the whole length:
+//   excerpt("lfemur")                    'lfemur'
+//   excerpt("a\tb\xff")                  'a\x09b\xff'
+//   excerpt(std::string(6144, '('), 8)   '(((((((('... (6144 bytes)
+inline std::string excerpt(std::string_view text, std::size_t max_chars = 60) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  const auto continuation = [&](std::size_t i, unsigned char lo, unsigned char hi) {
+    return i < text.size() && byte(i) >= lo && byte(i) <= hi;
+  };
+  std::string out = "'";
+  std::size_t columns = 0, i = 0;
+  while (i < text.size()) {
+    const unsigned char b = byte(i);
+    // Length of the valid, printable UTF-8 character at i (0: escape the byte).
+    std::size_t length = 0;
+    if (b >= 0x20 && b < 0x7F)
+      length = 1;
+    else if (b >= 0xC2 && b <= 0xDF && continuation(i + 1, b == 0xC2 ? 0xA0 : 0x80, 0xBF))
+      length = 2;  // U+0080..U+009F (C1 controls) escaped
+    else if (b >= 0xE0 && b <= 0xEF &&
+             continuation(i + 1, b == 0xE0 ? 0xA0 : 0x80, b == 0xED ? 0x9F : 0xBF) &&
+             continuation(i + 2, 0x80, 0xBF))
+      length = 3;
+    else if (b >= 0xF0 && b <= 0xF4 &&
+             continuation(i + 1, b == 0xF0 ? 0x90 : 0x80, b == 0xF4 ? 0x8F : 0xBF) &&
+             continuation(i + 2, 0x80, 0xBF) && continuation(i + 3, 0x80, 0xBF))
+      length = 4;
+    const std::size_t width = length > 0 ? 1 : 4;
+    if (columns + width > max_chars) break;
+    columns += width;
+    if (length > 0) {
+      out.append(text.substr(i, length));
+      i += length;
+    } else {
+      out += {'\\', 'x', kHex[b >> 4], kHex[b & 0xF]};
+      ++i;
+    }
+  }
+  out += "'";
+  if (i < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
+  return out;
 }
 
 // `items` with `separator` between them ("a, b, c"; "" for none).
