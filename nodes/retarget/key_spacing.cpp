@@ -142,8 +142,8 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text) {
       used = 0;
     }
     if (used == 0 || used != number.size() || v < 0 || v > 100000)
-      throw std::invalid_argument(where + ": spacing '" + number +
-                                  "' is not an integer >= 0 (0 = automatic)");
+      throw std::invalid_argument(where + ": spacing " + text::excerpt(number) +
+                                  " is not an integer >= 0 (0 = automatic)");
     try {
       groups.push_back({kg::Pattern::compile(pattern), static_cast<int>(v)});
     } catch (const std::invalid_argument& e) {
