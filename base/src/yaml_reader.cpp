@@ -6,6 +6,7 @@
 #include <cmath>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 #include <unordered_map>
 
 namespace kg {
@@ -53,7 +54,7 @@ class DocumentCheck {
         if (it->first.IsScalar()) {
           const auto [first, inserted] = keys.emplace(it->first.Scalar(), it->first.Mark());
           if (!inserted)
-            throw Error("duplicate key " + text::in_quotes(text::excerpt(it->first.Scalar())) + " " +
+            throw Error("duplicate key " + text::excerpt(it->first.Scalar()) + " " +
                             where() + " (first at " + located(path_, first->second).to_string() + ")",
                         located(path_, it->first.Mark()));
           path_keys_.push_back({it->first.Scalar(), -1});
@@ -75,18 +76,18 @@ class DocumentCheck {
     return count;
   }
 
-  // "at the top level", "in nodes.a.params", "in constraints[2]": where the walk is.
+  // "at the top level", "in 'nodes.a.params'", "in 'constraints[2]'": where the walk is.
   std::string where() const {
     if (path_keys_.empty()) return "at the top level";
-    std::string out = "in ";
+    std::string out;  // the dotted path, quoted below
     for (const auto& [key, index] : path_keys_) {
       if (index >= 0) {
         out += "[" + std::to_string(index) + "]";
       } else {
-        out += (out.size() == 3 ? "" : ".") + text::excerpt(key);
+        out += (out.empty() ? "" : ".") + key;
       }
     }
-    return out;
+    return "in " + text::excerpt(out);
   }
 
   const std::string& path_;
@@ -230,6 +231,15 @@ int YamlReader::integer(const YAML::Node& n, const std::string& what) const {
 std::string YamlReader::text(const YAML::Node& n, const std::string& what) const {
   if (!n.IsScalar()) fail(what + ": expected a string", n);
   return n.Scalar();
+}
+
+Pattern YamlReader::pattern(const YAML::Node& n, const std::string& what) const {
+  if (!n.IsScalar()) fail(what + ": expected a regular expression (a string)", n);
+  try {
+    return Pattern::compile(n.Scalar());
+  } catch (const std::invalid_argument& e) {
+    fail(what + ": " + e.what(), n);
+  }
 }
 
 }  // namespace kg

@@ -213,18 +213,18 @@ class Variables {
       }
       const std::size_t close = text.find('}', i + 2);
       if (close == std::string::npos)
-        loader_.fail("unterminated '${' in " + text::in_quotes(text::excerpt(text)) +
+        loader_.fail("unterminated '${' in " + text::excerpt(text) +
                          " (write $$ for a literal dollar)",
                      where);
       const std::string name = text.substr(i + 2, close - i - 2);
       if (!is_identifier(name, false))
-        loader_.fail("bad variable reference " + text::in_quotes("${" + text::excerpt(name) + "}") + " in " +
-                         text::in_quotes(text::excerpt(text)) +
+        loader_.fail("bad variable reference " + text::excerpt("${" + name + "}") + " in " +
+                         text::excerpt(text) +
                          ": a name has letters, digits and '_' (write $$ for a literal dollar)",
                      where);
       const std::string& value = lookup(name, where);
       if (out.size() + value.size() > kMaxExpandedBytes)
-        loader_.fail("expanding " + text::in_quotes(text::excerpt(text)) + " gives over " +
+        loader_.fail("expanding " + text::excerpt(text) + " gives over " +
                          std::to_string(kMaxExpandedBytes) + " bytes (the limit of a text after " +
                          "${...} expansion) at ${" + name + "} (" + std::to_string(value.size()) + " bytes)",
                      where);

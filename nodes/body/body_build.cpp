@@ -1,13 +1,13 @@
 // The body model of a skeleton: classes, bones, masses, inertias, overrides and torque limits
 // (the rules are in body_build.hpp).
 #include "kg/body/body_build.hpp"
+#include "kg/base/pattern.hpp"
 #include "kg/base/text.hpp"
 
 #include <cmath>
 #include <functional>
 #include <limits>
 #include <numbers>
-#include <regex>
 #include <stdexcept>
 
 #include <Eigen/Eigenvalues>
@@ -19,12 +19,11 @@ namespace {
 using kg::Error;
 using motion::Skeleton;
 
-std::regex compile(const std::string& pattern, const kg::SourceLocation& where, const std::string& what) {
+kg::Pattern compile(const std::string& pattern, const kg::SourceLocation& where, const std::string& what) {
   try {
-    return std::regex(pattern, std::regex::ECMAScript);
-  } catch (const std::regex_error& e) {
-    throw Error("bad regular expression " + text::in_quotes(pattern) + " in " + what + ": " + e.what(),
-                where);
+    return kg::Pattern::compile(pattern);
+  } catch (const std::invalid_argument& e) {
+    throw Error(what + ": " + e.what(), where);
   }
 }
 
@@ -35,14 +34,14 @@ struct Matches {
   std::vector<std::vector<int>> matched;
 };
 
-template <class Pattern>
-Matches match_first(const Skeleton& skeleton, const std::vector<Pattern>& patterns, const std::string& what) {
+template <class Rule>
+Matches match_first(const Skeleton& skeleton, const std::vector<Rule>& patterns, const std::string& what) {
   Matches m{std::vector<int>(static_cast<std::size_t>(skeleton.joint_count()), -1),
             std::vector<std::vector<int>>(patterns.size())};
   for (std::size_t p = 0; p < patterns.size(); ++p) {
-    const std::regex re = compile(patterns[p].pattern, patterns[p].where, what);
+    const kg::Pattern re = compile(patterns[p].pattern, patterns[p].where, what);
     for (int j = 0; j < skeleton.joint_count(); ++j) {
-      if (!std::regex_match(skeleton.joint(j).name, re)) continue;
+      if (!re.full_match(skeleton.joint(j).name)) continue;
       m.matched[p].push_back(j);
       if (m.owner[static_cast<std::size_t>(j)] < 0)
         m.owner[static_cast<std::size_t>(j)] = static_cast<int>(p);
@@ -51,13 +50,13 @@ Matches match_first(const Skeleton& skeleton, const std::vector<Pattern>& patter
   return m;
 }
 
-template <class Pattern>
-void require_matches(const Skeleton& skeleton, const std::vector<Pattern>& patterns, const Matches& m,
+template <class Rule>
+void require_matches(const Skeleton& skeleton, const std::vector<Rule>& patterns, const Matches& m,
                      const std::string& what) {
   for (std::size_t p = 0; p < patterns.size(); ++p)
     if (m.matched[p].empty())
       throw Error(
-          what + " pattern " + text::in_quotes(patterns[p].pattern) +
+          what + " pattern " + text::excerpt(patterns[p].pattern) +
               " matches no joint of the skeleton (the whole name must match; joints: " +
               [&] {
                 std::vector<std::string> names;
@@ -145,7 +144,7 @@ void check_spec(const BodySpec& spec) {
                                 ": expected a finite number >= 0");
   if (!spec.gravity.allFinite()) throw std::invalid_argument("gravity: expected a finite vector (m/s²)");
   for (const SegmentOverride& o : spec.segments) {
-    const std::string what = "segments " + text::in_quotes(o.pattern);
+    const std::string what = "segments " + text::excerpt(o.pattern);
     auto positive = [&](const std::optional<double>& v, const char* name) {
       if (v && (!std::isfinite(*v) || !(*v > 0)))
         throw Error(what + "." + name + " " + text::significant(*v, 4) + ": expected a finite number > 0",
@@ -165,10 +164,10 @@ void check_spec(const BodySpec& spec) {
     }
   }
   for (const TorqueLimit& t : spec.torque_limits) {
-    if (t.values.empty()) throw Error("torque_limits " + text::in_quotes(t.pattern) + ": no value", t.where);
+    if (t.values.empty()) throw Error("torque_limits " + text::excerpt(t.pattern) + ": no value", t.where);
     for (double v : t.values)
       if (std::isnan(v) || !(v > 0))
-        throw Error("torque_limits " + text::in_quotes(t.pattern) + ": " + text::significant(v, 4) +
+        throw Error("torque_limits " + text::excerpt(t.pattern) + ": " + text::significant(v, 4) +
                         " is no bound (expected N m > 0, or .inf for unlimited)",
                     t.where);
   }
@@ -325,7 +324,7 @@ ClassNames match_classes(const Skeleton& s, const BodySpec& spec, BuiltBody& out
     for (int j : user.matched[p])
       if (user.owner[J(j)] == static_cast<int>(p)) matched.push_back(s.joint(j).name);
     out.notes.push_back(
-        "classes " + text::in_quotes(spec.classes[p].pattern) + " -> " +
+        "classes " + text::excerpt(spec.classes[p].pattern) + " -> " +
         to_string(spec.classes[p].segment_class) + ": " +
         (matched.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(matched)));
   }
@@ -597,7 +596,7 @@ void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
       if (om.owner[J(j)] != static_cast<int>(p)) continue;
       const std::string& name = s.joint(j).name;
       SegmentInertia& seg = out.body.segments[J(j)];
-      const std::string what = "segments " + text::in_quotes(o.pattern) + ": joint " + text::in_quotes(name);
+      const std::string what = "segments " + text::excerpt(o.pattern) + ": joint " + text::in_quotes(name);
       if (out.classes[J(j)] == SegmentClass::Massless) {
         if (o.mass || o.radius || o.inertia)
           throw Error(
@@ -611,7 +610,7 @@ void apply_overrides(const Skeleton& s, const BodySpec& spec, BuiltBody& out) {
                      " kg");
     }
     out.notes.push_back(
-        "segments " + text::in_quotes(o.pattern) + ": " +
+        "segments " + text::excerpt(o.pattern) + ": " +
         (done.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(done)));
   }
 }
@@ -653,7 +652,7 @@ std::vector<bool> unactuate_floating_base(const Skeleton& s, BuiltBody& out) {
 // Bounds joint jt's channels by the limit t: one value for every rotation channel, or one per channel.
 void limit_joint(const TorqueLimit& t, const motion::Joint& jt, BodyModel& body) {
   if (t.values.size() != 1 && t.values.size() != jt.channels.size())
-    throw Error("torque_limits " + text::in_quotes(t.pattern) + ": " + std::to_string(t.values.size()) +
+    throw Error("torque_limits " + text::excerpt(t.pattern) + ": " + std::to_string(t.values.size()) +
                     " values for joint " + text::in_quotes(jt.name) + ", which has " +
                     std::to_string(jt.channels.size()) + " channels (give one value, or one per channel)",
                 t.where);
@@ -685,11 +684,11 @@ void apply_torque_limits(const Skeleton& s, const BodySpec& spec, const std::vec
       done.push_back(jt.name);
     }
     if (done.empty() && !skipped.empty())
-      throw Error("torque_limits " + text::in_quotes(t.pattern) + " matches only the floating base (" +
+      throw Error("torque_limits " + text::excerpt(t.pattern) + " matches only the floating base (" +
                       text::join(skipped) + "), whose channels are unactuated: their bounds are always 0",
                   t.where);
     out.notes.push_back(
-        "torque_limits " + text::in_quotes(t.pattern) + " = " +
+        "torque_limits " + text::excerpt(t.pattern) + " = " +
         (t.values.size() == 1 ? text::significant(t.values[0], 4) + " N m"
                               : std::to_string(t.values.size()) + " values") +
         ": " + (done.empty() ? std::string("no joint left (earlier patterns took them)") : text::join(done)));

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <regex>
 
 #include <yaml-cpp/yaml.h>
 
@@ -36,14 +35,8 @@ class Reader : public kg::YamlReader {
     if (v.size() != 3) fail(what + ": expected 3 numbers [x, y, z], got " + std::to_string(v.size()), n);
     return {v[0], v[1], v[2]};
   }
-  void check_regex(const Entry& e, const std::string& what) const {
-    try {
-      std::regex re(e.key, std::regex::ECMAScript);
-    } catch (const std::regex_error& err) {
-      fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(),
-           e.key_node);
-    }
-  }
+  // A bad pattern fails here, at its key; build_body_model compiles it again (BodySpec keeps text).
+  void check_pattern(const Entry& e, const std::string& what) const { pattern(e.key_node, what); }
 
   // [Ixx, Iyy, Izz], [Ixx, Iyy, Izz, Ixy, Ixz, Iyz] or three rows of three.
   Eigen::Matrix3d inertia(const YAML::Node& n, const std::string& what) const {
@@ -148,7 +141,7 @@ class Reader : public kg::YamlReader {
   std::vector<ClassPattern> classes(const YAML::Node& n) const {
     std::vector<ClassPattern> out;
     for (const Entry& c : entries(n, "classes")) {
-      check_regex(c, "classes");
+      check_pattern(c, "classes");
       if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
         const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
         const std::string near = kg::nearest_name(got, segment_class_names());
@@ -163,7 +156,7 @@ class Reader : public kg::YamlReader {
   }
 
   SegmentOverride segment_override(const Entry& s) const {
-    check_regex(s, "segments");
+    check_pattern(s, "segments");
     const std::string what = "segments." + s.key;
     const std::vector<Entry> fields = entries(s.value, what);
     check_keys(fields, what, {"mass", "mass_scale", "com", "inertia", "radius"});
@@ -189,7 +182,7 @@ class Reader : public kg::YamlReader {
   }
 
   TorqueLimit torque_limit(const Entry& t) const {
-    check_regex(t, "torque_limits");
+    check_pattern(t, "torque_limits");
     const std::string what = "torque_limits." + t.key;
     TorqueLimit limit{.pattern = t.key, .values = {}, .where = at(t.key_node)};
     if (t.value.IsSequence()) {

@@ -10,7 +10,6 @@
 #include <fstream>
 #include <limits>
 #include <numbers>
-#include <regex>
 #include <stdexcept>
 
 #include <yaml-cpp/yaml.h>
@@ -333,17 +332,12 @@ class Reader : public kg::YamlReader {
     const int frames = frame_count(character);
     for (auto it = limits.begin(); it != limits.end(); ++it) {
       const std::string pattern = it->first.Scalar();
-      std::regex re;
-      try {
-        re = std::regex(pattern, std::regex::ECMAScript);
-      } catch (const std::regex_error& e) {
-        fail("limits: bad regular expression '" + pattern + "': " + e.what(), it->first.Mark());
-      }
+      const kg::Pattern re = YamlReader::pattern(it->first, "limits");
       std::vector<int> joints;
       for (int j = 0; j < sk.joint_count(); ++j)
-        if (std::regex_match(sk.joint(j).name, re)) joints.push_back(j);
+        if (re.full_match(sk.joint(j).name)) joints.push_back(j);
       if (joints.empty()) {
-        std::string msg = "limits: '" + pattern + "' matches no joint";
+        std::string msg = "limits: " + text::excerpt(pattern) + " matches no joint";
         const std::string near = kg::nearest_name(pattern, names);
         if (!near.empty()) msg += " (nearest: '" + near + "')";
         fail(msg, it->first.Mark());

@@ -1,10 +1,10 @@
 // Key spacing from a band-pass pyramid (§3.7); see key_spacing.hpp for the exact rule.
 #include "kg/retarget/key_spacing.hpp"
 #include "kg/base/option_check.hpp"
+#include "kg/base/text.hpp"
 
 #include <algorithm>
 #include <cmath>
-#include <regex>
 #include <span>
 #include <sstream>
 #include <stdexcept>
@@ -126,14 +126,14 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text) {
     start = end + 1;
     ++item;
     if (part.empty()) continue;
-    const std::string where = "groups item " + std::to_string(item) + " '" + part + "'";
+    const std::string item_name = "groups item " + std::to_string(item);
+    const std::string where = item_name + " " + text::excerpt(part);
     const std::size_t eq = part.rfind('=');
     if (eq == std::string::npos)
       throw std::invalid_argument(where + ": expected regex=spacing, e.g. arm|Arm=2");
-    KeyGroup g;
-    g.pattern = trim(part.substr(0, eq));
+    const std::string pattern = trim(part.substr(0, eq));
     const std::string number = trim(part.substr(eq + 1));
-    if (g.pattern.empty()) throw std::invalid_argument(where + ": empty joint-name pattern before '='");
+    if (pattern.empty()) throw std::invalid_argument(where + ": empty joint-name pattern before '='");
     std::size_t used = 0;
     long v = -1;
     try {
@@ -142,15 +142,13 @@ std::vector<KeyGroup> parse_key_groups(const std::string& text) {
       used = 0;
     }
     if (used == 0 || used != number.size() || v < 0 || v > 100000)
-      throw std::invalid_argument(where + ": spacing '" + number +
-                                  "' is not an integer >= 0 (0 = automatic)");
-    g.spacing = static_cast<int>(v);
+      throw std::invalid_argument(where + ": spacing " + text::excerpt(number) +
+                                  " is not an integer >= 0 (0 = automatic)");
     try {
-      std::regex re(g.pattern);
-    } catch (const std::regex_error& err) {
-      throw std::invalid_argument(where + ": bad regular expression: " + err.what());
+      groups.push_back({kg::Pattern::compile(pattern), static_cast<int>(v)});
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(item_name + ": " + e.what());  // the message quotes the pattern
     }
-    groups.push_back(std::move(g));
   }
   return groups;
 }
@@ -181,18 +179,18 @@ KeySpacing choose_key_spacing(const motion::Motion& m, const KeySpacingOptions& 
   std::vector<KeyGroupChoice> choices(groups.size() + 1);
   choices[0].spacing = o.spacing;
   for (std::size_t g = 0; g < groups.size(); ++g) {
-    choices[g + 1].pattern = groups[g].pattern;
+    choices[g + 1].pattern = groups[g].pattern.text();
     choices[g + 1].spacing = groups[g].spacing;
-    const std::regex re(groups[g].pattern);
     bool any = false;
     for (int j = 0; j < s.joint_count(); ++j) {
-      if (!std::regex_search(s.joint(j).name, re)) continue;
+      if (!groups[g].pattern.partial_match(s.joint(j).name)) continue;
       any = true;
       if (group_of[static_cast<std::size_t>(j)] == 0)
         group_of[static_cast<std::size_t>(j)] = static_cast<int>(g) + 1;
     }
     if (!any)
-      throw std::invalid_argument("groups: pattern '" + groups[g].pattern + "' matches no joint name");
+      throw std::invalid_argument("groups: pattern " + text::excerpt(groups[g].pattern.text()) +
+                                  " matches no joint name");
   }
   std::vector<std::vector<int>> channels(choices.size());
   for (int j = 0; j < s.joint_count(); ++j) {

@@ -4,10 +4,11 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
-#include <regex>
 #include <stdexcept>
 #include <string>
 
+#include "kg/base/pattern.hpp"
+#include "kg/base/text.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/key_spacing.hpp"
@@ -28,20 +29,19 @@ using graph::ParamType;
 using graph::RunContext;
 using retarget::CharacterProblem;
 
-std::regex compile_freeze(const std::string& name, const std::string& pattern) {
+kg::Pattern compile_freeze(const std::string& name, const std::string& pattern) {
   try {
-    return std::regex(pattern, std::regex::ECMAScript);
-  } catch (const std::regex_error& e) {
-    throw std::invalid_argument(name + ": '" + pattern + "' is not a valid regular expression (" + e.what() +
-                                ")");
+    return kg::Pattern::compile(pattern);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(name + ": " + e.what());
   }
 }
 
 class SpacetimeNode final : public Node {
  public:
   explicit SpacetimeNode(const Params& p)
-      : freeze_text_{p.get<std::string>("freeze"), p.get<std::string>("freeze2")},
-        freeze_{compile_freeze("freeze", freeze_text_[0]), compile_freeze("freeze2", freeze_text_[1])},
+      : freeze_{compile_freeze("freeze", p.get<std::string>("freeze")),
+                compile_freeze("freeze2", p.get<std::string>("freeze2"))},
         keys_(static_cast<int>(p.get<std::int64_t>("keys"))),
         strict_(p.get<bool>("strict")) {
     options_.epsilon = p.get<double>("epsilon");
@@ -129,25 +129,24 @@ class SpacetimeNode final : public Node {
         for (int f = 0; f < cp.initial.frame_count(); ++f)
           cp.skeleton_per_frame.push_back(target.skeleton_at(f / cp.initial.fps));
     }
-    const std::string& pattern = freeze_text_[static_cast<std::size_t>(index)];
+    const std::string& pattern = freeze_[static_cast<std::size_t>(index)].text();
     if (!pattern.empty()) {
       cp.frozen.assign(static_cast<std::size_t>(channels), false);
       int matched = 0;
       for (const motion::Joint& jt : sk.joints()) {
-        if (!std::regex_match(jt.name, freeze_[static_cast<std::size_t>(index)])) continue;
+        if (!freeze_[static_cast<std::size_t>(index)].full_match(jt.name)) continue;
         ++matched;
         for (std::size_t c = 0; c < jt.channels.size(); ++c)
           cp.frozen[static_cast<std::size_t>(jt.first_channel) + c] = true;
       }
       if (matched == 0)
-        throw std::invalid_argument(std::string(index == 0 ? "freeze" : "freeze2") + ": '" + pattern +
-                                    "' matches no joint of " + who + "'s skeleton");
+        throw std::invalid_argument(std::string(index == 0 ? "freeze" : "freeze2") + ": " +
+                                    text::excerpt(pattern) + " matches no joint of " + who + "'s skeleton");
     }
     return cp;
   }
 
-  std::string freeze_text_[2];
-  std::regex freeze_[2];
+  kg::Pattern freeze_[2];  // compiled once, when the graph loads; "" freezes nothing
   int keys_;
   bool strict_;
   retarget::SpacetimeOptions options_;
@@ -208,12 +207,11 @@ NodeType spacetime_type() {
                 .doc = "frames between keys when no `keys` input is connected",
                 .min = 1,
                 .max = 1000},
-      ParamSpec{
-          .name = "freeze",
-          .type = ParamType::String,
-          .default_value = std::string(""),
-          .doc =
-              "regular expression (whole joint name) of joints whose channels must not change; \"\": none"},
+      ParamSpec{.name = "freeze",
+                .type = ParamType::String,
+                .default_value = std::string(""),
+                .doc = "regular expression (RE2, whole joint name) of joints whose channels must not change; "
+                       "\"\": none"},
       ParamSpec{.name = "freeze2",
                 .type = ParamType::String,
                 .default_value = std::string(""),

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <regex>
 
 #include <yaml-cpp/yaml.h>
 
@@ -40,18 +39,12 @@ class Reader : public kg::YamlReader {
       fail(what + " is empty (expected joint-name patterns: " + (lengths ? "length" : "factor") + ")", map);
     for (std::size_t p = 0; p < es.size(); ++p) {
       const Entry& e = es[p];
-      std::regex re;
-      try {
-        re = std::regex(e.key, std::regex::ECMAScript);
-      } catch (const std::regex_error& err) {
-        fail("bad regular expression " + text::in_quotes(e.key) + " in " + what + ": " + err.what(),
-             e.key_node);
-      }
+      const kg::Pattern re = pattern(e.key_node, what);
       const double v = positive(e.value, what + "." + e.key);
       std::vector<std::string> matched, shadowed;
       for (int j = 0; j < n; ++j) {
         const std::string& name = source_.joint(j).name;
-        if (!std::regex_match(name, re)) continue;
+        if (!re.full_match(name)) continue;
         if (owner[static_cast<std::size_t>(j)] >= 0) {
           shadowed.push_back(name);
           continue;
@@ -70,7 +63,7 @@ class Reader : public kg::YamlReader {
         matched.push_back(name);
       }
       if (matched.empty() && shadowed.empty())
-        fail("pattern " + text::in_quotes(e.key) + " in " + what +
+        fail("pattern " + text::excerpt(e.key) + " in " + what +
                  " matches no joint (the whole name must match)",
              e.key_node);
       std::string note = what + " " + text::in_quotes(e.key) + " = " + text::significant(v) + ": " +

@@ -196,7 +196,8 @@ NodeType target_type() {
   spec.doc =
       "The character to retarget to: the motion's skeleton with other segment lengths, as a uniform `scale`, "
       "or a "
-      "`target` file: YAML of per-bone factors (bones:, joint-name regex matched against the whole name, "
+      "`target` file: YAML of per-bone factors (bones:, joint-name regex (RE2) matched against the whole "
+      "name, "
       "first match "
       "wins), absolute lengths (lengths:) or keyframed factors (morph:), or a .bvh/.asf skeleton of the same "
       "structure (its offsets are taken; axes and channels stay the source's).";
@@ -260,7 +261,7 @@ NodeType key_spacing_type() {
   spacing.max = 100000;
   ParamSpec groups{
       "groups", ParamType::String, std::string{},
-      "per-group spacings: 'regex=spacing' items separated by ';', regex searched in joint names, "
+      "per-group spacings: 'regex=spacing' items separated by ';', regex (RE2) searched in joint names, "
       "first match wins, 0 = automatic for that group (e.g. \"arm|hand|Arm|Hand=2\")"};
   spec.params = {threshold, spacing, groups};
   return {spec, [](const Params& p) { return std::make_unique<KeySpacingNode>(p); }};

@@ -34,22 +34,29 @@ TEST_CASE("format_double and parse_double round-trip", "[text]") {
   CHECK(text::lower_extension("dir/Walk.BVH") == ".bvh");
 }
 
-TEST_CASE("excerpt: short, escaped, cut at a character", "[text]") {
-  CHECK(text::excerpt("lfoot") == "lfoot");
-  CHECK(text::excerpt("Hüfte") == "Hüfte");                                            // UTF-8 passes through
-  CHECK(text::excerpt(std::string("\xff\xfeH\0I\0", 6)) == "\\xff\\xfeH\\x00I\\x00");  // UTF-16 bytes
-  CHECK(text::excerpt("a\tb\x7f") == "a\\x09b\\x7f");
-  CHECK(text::excerpt("\xc3") == "\\xc3");             // a sequence cut short
-  CHECK(text::excerpt("\xe2\x82x") == "\\xe2\\x82x");  // a continuation missing
-  const std::string long_text(6144, '(');
-  const std::string cut = text::excerpt(long_text);
-  CHECK(cut == std::string(60, '(') + "... (6144 bytes)");
-  CHECK(text::excerpt(long_text, 10).size() < 30);
-  CHECK(text::excerpt("üüü", 3) == "üü... (6 bytes)");  // never half a character
+TEST_CASE("excerpt: quoted, escaped, cut with the whole length", "[text]") {
+  CHECK(text::excerpt("lfemur") == "'lfemur'");
+  CHECK(text::excerpt("") == "''");
+  CHECK(text::excerpt(std::string("a\tb\xff\x7f", 5)) == "'a\\x09b\\xff\\x7f'");
+  CHECK(text::excerpt(std::string("\0z", 2)) == "'\\x00z'");
+  CHECK(text::excerpt("Tête_Épaule") == "'Tête_Épaule'");       // valid UTF-8 kept
+  CHECK(text::excerpt("\xc3(") == "'\\xc3('");                  // a lead byte without its continuation
+  CHECK(text::excerpt("\xc2\x85") == "'\\xc2\\x85'");           // a C1 control (U+0085)
+  CHECK(text::excerpt("\xed\xa0\x80") == "'\\xed\\xa0\\x80'");  // a UTF-16 surrogate
+  CHECK(text::excerpt(std::string(6144, '('), 8) == "'(((((((('... (6144 bytes)");
+  CHECK(text::excerpt("abcdef", 6) == "'abcdef'");  // exactly max_chars: not cut
+  CHECK(text::excerpt("abcdefg", 6) == "'abcdef'... (7 bytes)");
+  // An escape counts 4 and is never split; UTF-8 characters count 1.
+  CHECK(text::excerpt("ab\x01", 5) == "'ab'... (3 bytes)");
+  CHECK(text::excerpt("éééé", 2) == "'éé'... (8 bytes)");
+  const std::string binary(100000, '\x01');
+  const std::string e = text::excerpt(binary);
+  CHECK(e.size() <= 2 + 60 + 20);
+  CHECK_THAT(e, Catch::EndsWith("... (100000 bytes)"));
 }
 
 TEST_CASE("in_quotes escapes and cuts what a file gave", "[text]") {
-  CHECK(text::in_quotes("a\x01"
-                        "b") == "'a\\x01b'");
-  CHECK(text::in_quotes(std::string(6144, 'k')) == "'" + std::string(200, 'k') + "... (6144 bytes)'");
+  CHECK(text::in_quotes("lfoot") == "'lfoot'");
+  CHECK(text::in_quotes(std::string("\xff\xfeH\0I\0", 6)) == "'\\xff\\xfeH\\x00I\\x00'");  // UTF-16 bytes
+  CHECK(text::in_quotes(std::string(6144, 'k')) == "'" + std::string(200, 'k') + "'... (6144 bytes)");
 }

@@ -26,14 +26,14 @@ TEST_CASE("parse_yaml refuses a key given twice in any map, naming both places",
   CHECK(error_of("a: 1\nb: 2\na: 3\n") ==
         "f.yaml:3:1: duplicate key 'a' at the top level (first at f.yaml:1:1)");
   CHECK(error_of("constraints:\n  - {joint: lfoot, joint: nosuch}\n") ==
-        "f.yaml:2:20: duplicate key 'joint' in constraints[0] (first at f.yaml:2:6)");
+        "f.yaml:2:20: duplicate key 'joint' in 'constraints[0]' (first at f.yaml:2:6)");
   CHECK(error_of("patches:\n  - joint: a\npatches:\n  - joint: b\n") ==
         "f.yaml:3:1: duplicate key 'patches' at the top level (first at f.yaml:1:1)");
   CHECK(error_of("x:\n  y:\n    z: 1\n    z: 2\n") ==
-        "f.yaml:4:5: duplicate key 'z' in x.y (first at f.yaml:3:5)");
+        "f.yaml:4:5: duplicate key 'z' in 'x.y' (first at f.yaml:3:5)");
   CHECK(error_of("a: 1\nb: {a: 1, b: [1, {a: 2}]}\n") == "(accepted)");  // the same key in other maps
   CHECK(error_of("a: &x {k: 1, k: 2}\nb: *x\n") ==
-        "f.yaml:1:14: duplicate key 'k' in a (first at f.yaml:1:8)");
+        "f.yaml:1:14: duplicate key 'k' in 'a' (first at f.yaml:1:8)");
 }
 
 TEST_CASE("parse_yaml: a long or binary key is quoted short and escaped", "[yaml]") {

@@ -538,3 +538,53 @@ TEST_CASE("a bad option of a built-in node is refused at load with file:line, be
   }
   CHECK_FALSE(fs::exists(out));  // refused before any node ran
 }
+
+TEST_CASE("a fuzzed joint-name pattern fails at its file:line with a short excerpt, writing nothing",
+          "[cli]") {
+  // Fuzzing found these crashing the CLI (SIGSEGV in std::regex); they now go through RE2.
+  TempDir dir;
+  const fs::path source = KG_SOURCE_DIR;
+  const fs::path clip = source / "tests/graphs/data/two_joints.bvh";
+  const std::string deep(30000, '(');
+  // Which line of stderr says `what` (none: "").
+  const auto line_with = [](const std::string& text, const std::string& what) {
+    std::istringstream in(text);
+    for (std::string line; std::getline(in, line);)
+      if (line.find(what) != std::string::npos) return line;
+    return std::string();
+  };
+
+  SECTION("a target file: the run fails at the pattern's key, no clip or report written") {
+    // A key longer than YAML's 1024 characters is written explicitly: "? key", ": value".
+    const fs::path target = dir.write("deep.yaml", "version: 1\nbones:\n  ? \"" + deep + "\"\n  : 0.5\n");
+    const fs::path out = dir.path() / "out.bvh", report = dir.path() / "metrics.json";
+    const Result r = kinegraph({"run", (source / "graphs/retarget.yaml").string(), "--set",
+                                "input=" + clip.string(), "--set", "target=" + target.string(), "--set",
+                                "output=" + out.string(), "--set", "report=" + report.string()});
+    INFO(show(r));
+    CHECK(r.code == 1);
+    const std::string line = line_with(r.err, "bad regular expression");
+    CHECK_THAT(line,
+               Contains(target.string() + ":3:5: bones: bad regular expression '" + std::string(60, '(') +
+                        "'... (30000 bytes): longer than the 4096 bytes allowed"));
+    CHECK(line.size() < 400 + target.string().size());
+    CHECK(r.err.find(std::string(100, '(')) == std::string::npos);  // never quoted whole
+    CHECK_FALSE(fs::exists(out));
+    CHECK_FALSE(fs::exists(report));
+  }
+
+  SECTION("a freeze pattern given with --set: refused at load, at the node's line") {
+    const fs::path out = dir.path() / "follow.bvh";
+    const Result r = kinegraph({"validate", (source / "graphs/salsa.yaml").string(), "--set",
+                                "follow=" + clip.string(), "--set", "lead=" + clip.string(), "--set",
+                                "output=" + out.string(), "--set", "lead_fixed=" + deep});
+    INFO(show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err, StartsWith("kinegraph: " + (source / "graphs/salsa.yaml").string() + ":"));
+    const std::string line = line_with(r.err, "bad regular expression");
+    CHECK_THAT(line, Contains("(retarget.spacetime): freeze2: bad regular expression '((((") &&
+                         Contains("... (30000 bytes)"));
+    CHECK(line.size() < 500);
+    CHECK_FALSE(fs::exists(out));
+  }
+}

@@ -98,7 +98,7 @@ TEST_CASE("hostile constraint files: huge ranges, offsets and times are refused 
       {"a key twice",
        "{kind: position, points: [{joint: " + clip.joint +
            ", joint: nosuch}], params: [0, 0, 0], frames: [0, 1]}",
-       {"c.yaml:3:", "duplicate key 'joint' in constraints[0].points[0]"}},
+       {"c.yaml:3:", "duplicate key 'joint' in 'constraints[0].points[0]'"}},
   };
   for (const Case& c : cases) {
     SECTION(c.name) {
@@ -149,7 +149,7 @@ TEST_CASE("hostile clip files: encodings, absurd numbers and frame times at thei
     const std::string text("\xff\xfeH\0I\0E\0R\0A\0R\0C\0H\0Y\0\n\0", 22);
     const Result r = run(dir.write("u16.bvh", text));
     expect_refused(
-        r, {"u16.bvh:1:1: BVH file is UTF-16 (little-endian) text", "mark \\xff\\xfe)", "save it as UTF-8"},
+        r, {"u16.bvh:1:1: BVH file is UTF-16 (little-endian) text", "mark '\\xff\\xfe')", "save it as UTF-8"},
         output);
     CHECK(r.err.find('\xff') == std::string::npos);  // bytes are escaped, never printed raw
   }
@@ -190,7 +190,7 @@ TEST_CASE("every YAML reader refuses a key given twice (one shared check)", "[gr
                                                          ", joint: " + clip.joint +
                                                          ", vertices: [[0, 0, 0]], frames: [0, 1]}\n",
                                                      "k.yaml", clip.motion),
-                    Contains("k.yaml:3:") && Contains("duplicate key 'joint' in patches[0]"));
+                    Contains("k.yaml:3:") && Contains("duplicate key 'joint' in 'patches[0]'"));
 }
 
 TEST_CASE("contact times far outside the clip are refused, not wrapped to frames", "[graphs][hostile]") {

@@ -3,10 +3,12 @@
 // retarget.merge_constraints nodes.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <numbers>
 
+#include "../support/fuzzed_patterns.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/builtin_nodes.hpp"
@@ -252,6 +254,21 @@ TEST_CASE("constraint file errors name file:line:column and what was expected") 
       CHECK(e.where().file == "c.yaml");
     }
   }
+}
+
+TEST_CASE("constraint file: fuzzed limits patterns refused at their key with a short excerpt") {
+  const auto start = std::chrono::steady_clock::now();
+  for (const kg::test::FuzzedPattern& p : kg::test::fuzzed_patterns()) {
+    std::string message = "no kg::Error";
+    try {
+      read("version: 1\nlimits:\n  LeftLeg: {Xrotation: [0, 1]}\n" +
+           kg::test::explicit_entry(p.text, "{Xrotation: [0, 1]}", 2));
+    } catch (const kg::Error& e) {
+      message = e.what();
+    }
+    kg::test::check_refusal(message, "c.yaml:4:5: limits: ", p);
+  }
+  CHECK(kg::test::seconds_since(start) < 10);
 }
 
 TEST_CASE("constraint files on disk, joint limits from skeletons, merging") {

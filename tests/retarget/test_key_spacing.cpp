@@ -3,11 +3,13 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <functional>
 #include <numbers>
 
+#include "../support/fuzzed_patterns.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -196,6 +198,33 @@ TEST_CASE("real walks at 30 Hz: the pyramid's choice", "[retarget][keys][data]")
     CHECK(k20.frames_per_key.front() == 8);
   }
   if (!any) WARN("skipped: CMU walks not found under " << dir);
+}
+
+TEST_CASE("key spacing groups: fuzzed patterns refused with a short excerpt, in the text and the node",
+          "[retarget][keys]") {
+  const auto registry = kg::test::registry_of(kg::retarget_target_node_types());
+  const auto start = std::chrono::steady_clock::now();
+  for (const kg::test::FuzzedPattern& p : kg::test::fuzzed_patterns()) {
+    const auto error = [&](const auto& f) {
+      try {
+        f();
+      } catch (const std::invalid_argument& e) {
+        return std::string(e.what());
+      }
+      return std::string("no std::invalid_argument");
+    };
+    kg::test::check_refusal(error([&] { kg::retarget::parse_key_groups(p.text + "=2"); }),
+                            "groups item 1: ", p);
+    kg::test::check_refusal(error([&] { kg::retarget::parse_key_groups("Arm=2; " + p.text + "=4"); }),
+                            "groups item 2: ", p);
+    kg::test::check_refusal(error([&] {
+                              registry.create_node("retarget.key_spacing",
+                                                   kg::test::params_for(registry, "retarget.key_spacing",
+                                                                        {{"groups", p.text + "=2"}}));
+                            }),
+                            "KeySpacingOptions.groups = '", p);
+  }
+  CHECK(kg::test::seconds_since(start) < 10);
 }
 
 TEST_CASE("retarget.key_spacing node reports the level energies and the choice", "[retarget][keys][node]") {

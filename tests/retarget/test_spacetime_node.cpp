@@ -2,8 +2,10 @@
 // with the built-in constraint kinds.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 
+#include "../support/fuzzed_patterns.hpp"
 #include "../support/node_context.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -96,6 +98,23 @@ TEST_CASE("retarget.spacetime node: solves, reports, honours a freeze mask", "[s
   }
   const int knee = sk.joint(w.walk.figure.leg[0]).first_channel;
   CHECK((out.values.col(knee + 1) - w.m1.values.col(knee + 1)).cwiseAbs().maxCoeff() > 1e-3);
+}
+
+TEST_CASE("retarget.spacetime node: fuzzed freeze patterns refused when made, with a short excerpt",
+          "[spacetime][node]") {
+  const graph::NodeType& type = spacetime_node();
+  const auto start = std::chrono::steady_clock::now();
+  for (const test::FuzzedPattern& p : test::fuzzed_patterns())
+    for (const std::string param : {"freeze", "freeze2"}) {
+      std::string message = "no std::invalid_argument";
+      try {
+        type.create(test::params_for(type.spec, {{param, p.text}}));
+      } catch (const std::invalid_argument& e) {
+        message = e.what();
+      }
+      test::check_refusal(message, param + ": ", p);
+    }
+  CHECK(test::seconds_since(start) < 10);
 }
 
 TEST_CASE("retarget.spacetime node: key spacing input, contradictions reported, bad wiring refused",

@@ -2,10 +2,12 @@
 // morphs, and the YAML error table.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <string>
 
+#include "../support/fuzzed_patterns.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/base/error.hpp"
@@ -224,6 +226,28 @@ TEST_CASE("target YAML errors name file:line:column", "[retarget][target]") {
     CHECK(message.rfind(c.where, 0) == 0);
     CHECK(message.find(c.says) != std::string::npos);
   }
+}
+
+TEST_CASE("target YAML: fuzzed patterns refused at their key with a short excerpt", "[retarget][target]") {
+  const kg::synth::Figure fig = figure();
+  const auto start = std::chrono::steady_clock::now();
+  for (const kg::test::FuzzedPattern& p : kg::test::fuzzed_patterns()) {
+    const auto error = [&](const std::string& text) {
+      try {
+        kg::retarget::parse_target_yaml(fig.skeleton, text, "deep.yaml");
+      } catch (const kg::Error& e) {
+        return std::string(e.what());
+      }
+      return std::string("no kg::Error");
+    };
+    for (const std::string what : {"bones", "lengths"})
+      kg::test::check_refusal(error("version: 1\n" + what + ":\n" + kg::test::explicit_entry(p.text, "1", 2)),
+                              "deep.yaml:3:5: " + what + ": ", p);
+    kg::test::check_refusal(
+        error("version: 1\nmorph:\n  - time: 0\n    bones:\n" + kg::test::explicit_entry(p.text, "1", 6)),
+        "deep.yaml:5:9: morph[0].bones: ", p);
+  }
+  CHECK(kg::test::seconds_since(start) < 10);
 }
 
 TEST_CASE("skeleton file targets: same structure taken, another refused naming the difference",

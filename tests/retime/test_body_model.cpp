@@ -3,6 +3,7 @@
 // cylinders, body files with their error table, and the node alone and in a graph.
 #include <catch2/catch.hpp>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,6 +14,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "../support/fuzzed_patterns.hpp"
 #include "../support/node_context.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/base/error.hpp"
@@ -680,7 +682,7 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
       {"version: 1\nradii: {thgh: 0.1}\n", "bad.yaml:2:9",
        "unknown class 'thgh' in radii (did you mean 'thigh'?)"},
       {"version: 1\nclasses:\n  \"Left(\": thigh\n", "bad.yaml:3:3",
-       "bad regular expression 'Left(' in classes"},
+       "classes: bad regular expression 'Left(': missing )"},
       {"version: 1\nclasses:\n  LeftUpLeg: thy\n", "bad.yaml:3:14", "classes.LeftUpLeg: unknown class 'thy'"},
       {"version: 1\nsegments:\n  LeftUpLeg: {mas: 3}\n", "bad.yaml:3:15",
        "unknown key 'mas' in segments.LeftUpLeg (did you mean 'mass'?)"},
@@ -704,7 +706,9 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
       {"version: 1\nsegments:\n  LeftUpLeg: {inertia: [1, 1]}\n", "bad.yaml:3:24",
        "expected 3 numbers (principal"},
       {"version: 1\nsegments:\n  LeftUpLeg: {}\n", "bad.yaml:3:14", "expected at least one of"},
-      {"version: 1\nsegments:\n  \"[\": {mass: 1}\n", "bad.yaml:3:3", "bad regular expression '['"},
+      {"version: 1\nsegments:\n  \"[\": {mass: 1}\n", "bad.yaml:3:3", "segments: bad regular expression '['"},
+      {"version: 1\ntorque_limits:\n  \"(?!Hips)\": 100\n", "bad.yaml:3:3",
+       "torque_limits: bad regular expression '(?!Hips)': unsupported group '(?!'"},
       {"version: 1\ntorque_limits:\n  LeftLeg: 0\n", "bad.yaml:3:12",
        "torque_limits.LeftLeg: expected N m > 0"},
       {"version: 1\ntorque_limits:\n  LeftLeg: [10, -1]\n", "bad.yaml:3:17",
@@ -818,6 +822,46 @@ TEST_CASE("body file errors name file:line:column and the key", "[retime][body]"
   CHECK_THAT(thrown([&] { body::build_body_model(skel, bad); }),
              Catch::Contains("cylinder radius of head_neck"));
   CHECK_THAT(thrown([&] { body::load_body_yaml("/nonexistent/body.yaml"); }), Catch::Contains("body.yaml"));
+}
+
+TEST_CASE("body file and spec: fuzzed patterns refused at their place with a short excerpt",
+          "[retime][body]") {
+  const auto skel = figure();
+  const auto start = std::chrono::steady_clock::now();
+  for (const kg::test::FuzzedPattern& p : kg::test::fuzzed_patterns()) {
+    const auto error = [&](const auto& read) {
+      try {
+        read();
+      } catch (const kg::Error& e) {
+        return std::string(e.what());
+      }
+      return std::string("no kg::Error");
+    };
+    // In a body file: refused when read, at the key.
+    const std::pair<std::string, std::string> keys[] = {
+        {"classes", "thigh"}, {"segments", "{mass: 1}"}, {"torque_limits", "100"}};
+    for (const auto& [what, value] : keys)
+      kg::test::check_refusal(
+          error([&] {
+            body::parse_body_yaml("version: 1\n" + what + ":\n" + kg::test::explicit_entry(p.text, value, 2),
+                                  "deep.yaml");
+          }),
+          "deep.yaml:3:5: " + what + ": ", p);
+    // In a spec made in code: refused when building, at the pattern's `where`.
+    BodySpec spec;
+    spec.classes.push_back({p.text, SegmentClass::Thigh, {"spec.yaml", 7, 5}});
+    kg::test::check_refusal(error([&] { body::build_body_model(skel, spec); }),
+                            "spec.yaml:7:5: classes: ", p);
+    spec = BodySpec{};
+    spec.segments.push_back({.pattern = p.text, .mass = 1.0, .where = {"spec.yaml", 8, 5}});
+    kg::test::check_refusal(error([&] { body::build_body_model(skel, spec); }),
+                            "spec.yaml:8:5: segments: ", p);
+    spec = BodySpec{};
+    spec.torque_limits.push_back({.pattern = p.text, .values = {100}, .where = {"spec.yaml", 9, 5}});
+    kg::test::check_refusal(error([&] { body::build_body_model(skel, spec); }),
+                            "spec.yaml:9:5: torque_limits: ", p);
+  }
+  CHECK(kg::test::seconds_since(start) < 10);
 }
 
 TEST_CASE("check_body_model refuses inconsistent models", "[retime][body]") {

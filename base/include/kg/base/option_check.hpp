@@ -23,8 +23,8 @@
 
 namespace kg::options {
 
-// The value as the message shows it: shortest round-trip text for a double, quoted for a string,
-// a list of strings in brackets.
+// The value as the message shows it: shortest round-trip text for a double, quoted for a string
+// (text::excerpt: a long or binary one as a short escaped excerpt), a list of strings in brackets.
 template <class T>
 std::string value_text(const T& value) {
   if constexpr (std::is_same_v<T, std::vector<std::string>>) {
@@ -38,7 +38,7 @@ std::string value_text(const T& value) {
   } else if constexpr (std::is_integral_v<T>) {
     return std::to_string(value);
   } else {
-    return "'" + std::string(value) + "'";
+    return text::excerpt(std::string_view(value));
   }
 }
 

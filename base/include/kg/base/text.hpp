@@ -1,7 +1,7 @@
 // Number <-> text in one place, so params, messages, reports and graph
 // files print and parse numbers alike (shortest text that reads back to the same double); the
-// few significant digits of a message; lists joined for messages; and the file extension files
-// are told apart by.
+// few significant digits of a message; lists joined for messages; text of any length or bytes
+// quoted as a short excerpt; and the file extension files are told apart by.
 #pragma once
 
 #include <algorithm>
@@ -37,45 +37,60 @@ inline std::string significant(double x, int digits = 6) {
   return buf;
 }
 
-// At most about `max_bytes` of `text` as a message shows what a file holds: control bytes, DEL
-// and bytes that are not UTF-8 as \xNN (so a UTF-16 file or a binary one prints as escapes, never
-// as raw bytes); cut at a character boundary, with "... (N bytes)" telling the whole size.
-inline std::string excerpt(std::string_view text, std::size_t max_bytes = 60) {
-  auto utf8_length = [&](std::size_t i) -> std::size_t {  // 0: not a UTF-8 sequence at i
-    const auto byte = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
-    const unsigned char c = byte(i);
-    const std::size_t n = c >= 0xC2 && c <= 0xDF   ? 2
-                          : c >= 0xE0 && c <= 0xEF ? 3
-                          : c >= 0xF0 && c <= 0xF4 ? 4
-                                                   : 0;
-    if (n == 0 || i + n > text.size()) return 0;
-    for (std::size_t k = 1; k < n; ++k)
-      if ((byte(i + k) & 0xC0) != 0x80) return 0;
-    return n;
+
+// `text` quoted for a message whatever its length and bytes (a user's pattern, the start of a
+// file that is not what it should be): in single quotes like in_quotes, printable ASCII and
+// valid UTF-8 characters as they are, every other byte (controls, DEL, C1 controls, bytes of no
+// valid UTF-8 character) as \xNN; cut after `max_chars` characters (a UTF-8 character counts
+// 1, an escape 4, so the quoted part is at most max_chars columns), the cut marked by
+// "... (N bytes)" after the quotes with the whole length:
+//   excerpt("lfemur")                    'lfemur'
+//   excerpt("a\tb\xff")                  'a\x09b\xff'
+//   excerpt(std::string(6144, '('), 8)   '(((((((('... (6144 bytes)
+inline std::string excerpt(std::string_view text, std::size_t max_chars = 60) {
+  static constexpr char kHex[] = "0123456789abcdef";
+  const auto byte = [&](std::size_t i) { return static_cast<unsigned char>(text[i]); };
+  const auto continuation = [&](std::size_t i, unsigned char lo, unsigned char hi) {
+    return i < text.size() && byte(i) >= lo && byte(i) <= hi;
   };
-  std::string out;
-  std::size_t i = 0;
-  while (i < text.size() && out.size() < max_bytes) {
-    const unsigned char c = static_cast<unsigned char>(text[i]);
-    const std::size_t n = c >= 0x80 ? utf8_length(i) : 1;
-    if (c < 0x20 || c == 0x7f || n == 0) {
-      char buf[8];
-      std::snprintf(buf, sizeof buf, "\\x%02x", c);
-      out += buf;
-      ++i;
+  std::string out = "'";
+  std::size_t columns = 0, i = 0;
+  while (i < text.size()) {
+    const unsigned char b = byte(i);
+    // Length of the valid, printable UTF-8 character at i (0: escape the byte).
+    std::size_t length = 0;
+    if (b >= 0x20 && b < 0x7F)
+      length = 1;
+    else if (b >= 0xC2 && b <= 0xDF && continuation(i + 1, b == 0xC2 ? 0xA0 : 0x80, 0xBF))
+      length = 2;  // U+0080..U+009F (C1 controls) escaped
+    else if (b >= 0xE0 && b <= 0xEF &&
+             continuation(i + 1, b == 0xE0 ? 0xA0 : 0x80, b == 0xED ? 0x9F : 0xBF) &&
+             continuation(i + 2, 0x80, 0xBF))
+      length = 3;
+    else if (b >= 0xF0 && b <= 0xF4 &&
+             continuation(i + 1, b == 0xF0 ? 0x90 : 0x80, b == 0xF4 ? 0x8F : 0xBF) &&
+             continuation(i + 2, 0x80, 0xBF) && continuation(i + 3, 0x80, 0xBF))
+      length = 4;
+    const std::size_t width = length > 0 ? 1 : 4;
+    if (columns + width > max_chars) break;
+    columns += width;
+    if (length > 0) {
+      out.append(text.substr(i, length));
+      i += length;
     } else {
-      out.append(text.substr(i, n));
-      i += n;
+      out += {'\\', 'x', kHex[b >> 4], kHex[b & 0xF]};
+      ++i;
     }
   }
+  out += "'";
   if (i < text.size()) out += "... (" + std::to_string(text.size()) + " bytes)";
   return out;
 }
 
 // 'name': a name or a value quoted in a message; what a file gave may be anything, so it is
-// escaped and cut as excerpt does (at 200 bytes: a long path stays whole, a 6 KB key does not).
+// escaped and cut as excerpt does, at 200 characters (a long path stays whole, a 6 KB key does not).
 inline std::string in_quotes(std::string_view text) {
-  return "'" + excerpt(text, 200) + "'";
+  return excerpt(text, 200);
 }
 
 // `items` with `separator` between them ("a, b, c"; "" for none).

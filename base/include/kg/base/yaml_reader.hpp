@@ -1,7 +1,8 @@
 // Strict reading of the project's versioned YAML data files (target characters, body models,
 // ...): every error is a kg::Error located at file:line:column; map entries come in file
 // order with duplicate keys refused; unknown keys are refused with the nearest allowed one;
-// numbers must be finite. A file's own reader derives from YamlReader and adds its keys.
+// numbers must be finite; regular expressions are compiled where they are read, a bad one
+// failing at its place. A file's own reader derives from YamlReader and adds its keys.
 //
 //   class TargetReader : public kg::YamlReader { ... };
 //   TargetReader r("short_legs.yaml");
@@ -20,6 +21,7 @@
 #include <yaml-cpp/yaml.h>
 
 #include "kg/base/error.hpp"
+#include "kg/base/pattern.hpp"
 
 namespace kg {
 
@@ -70,6 +72,10 @@ class YamlReader {
   double non_negative(const YAML::Node& node, const std::string& what) const;  // >= 0
   int integer(const YAML::Node& node, const std::string& what) const;
   std::string text(const YAML::Node& node, const std::string& what) const;  // a scalar
+  // A user's regular expression (kg/base/pattern.hpp: RE2 syntax, bounded length) from a scalar
+  // (a map key's node too), compiled; a bad one fails at the node as
+  // "what: bad regular expression '<short excerpt>': why".
+  Pattern pattern(const YAML::Node& node, const std::string& what) const;
 
  private:
   std::string path_;

@@ -8,15 +8,15 @@
 //   BuiltBody heavy = build_body_model(motion.skeleton, f.spec);
 //   Eigen::Vector3d com = body_com(heavy.body, motion.values.row(f));  // world, metres
 //
-// Classes. Each joint gets a SegmentClass from the first joint-name pattern (ECMAScript regex
-// matched against the WHOLE name, case-sensitive) that matches it: the spec's own patterns
-// first, then default_class_patterns(), which know the CMU ASF/AMC and BVH names, MotionBuilder's,
-// Daz's, iClone's CC_Base_*, Bandai's, GAMES-105's and Mixamo-style (synth::make_figure) names.
-// A joint no pattern matches is massless, and a note says so. Clavicles and hip connectors
-// (lclavicle, lCollar, Shoulder_L, lhipjoint, lButtock) are massless by default: both tables'
-// trunks run to the shoulder and hip joints, so their mass is the trunk's, which the spine
-// joints carry; helper joints (twist and share bones, eyes, jaw, tongue, off-body roots such as
-// Bandai's joint_Root on the floor) are massless too.
+// Classes. Each joint gets a SegmentClass from the first joint-name pattern (a regular expression
+// in RE2 syntax, kg/base/pattern.hpp, matched against the WHOLE name, case-sensitive) that
+// matches it: the spec's own patterns first, then default_class_patterns(), which know the CMU
+// ASF/AMC and BVH names, MotionBuilder's, Daz's, iClone's CC_Base_*, Bandai's, GAMES-105's and
+// Mixamo-style (synth::make_figure) names. A joint no pattern matches is massless, and a note
+// says so. Clavicles and hip connectors (lclavicle, lCollar, Shoulder_L, lhipjoint, lButtock)
+// are massless by default: both tables' trunks run to the shoulder and hip joints, so their
+// mass is the trunk's, which the spine joints carry; helper joints (twist and share bones, eyes,
+// jaw, tongue, off-body roots such as Bandai's joint_Root on the floor) are massless too.
 //
 // Bones. A joint's segment is the rigid body moving with its frame; its bone is a vector in the
 // joint's frame (metres) from the joint's origin to:
@@ -104,6 +104,8 @@
 //     "[lr]tibia": [250]
 //   friction: 0.5              # Coulomb coefficient, >= 0
 //   gravity: 9.81              # m/s² straight down (>= 0), or a world vector [x, y, z] (+Y up)
+// Patterns are RE2 syntax (https://github.com/google/re2/wiki/Syntax: no backreferences or
+// lookaround), at most Pattern::kMaxLength bytes.
 // Unknown keys (reported by dotted path, with the nearest allowed name), duplicate keys, a
 // wrong or missing version, non-numbers, non-finite numbers, masses and radii <= 0, bad regular
 // expressions, unknown tables or classes, both mass and mass_scale, and (when building) patterns
@@ -126,7 +128,7 @@
 
 namespace kg::body {
 
-// A joint-name pattern (ECMAScript regex, whole name) and the class it gives. `where` locates it
+// A joint-name pattern (RE2 regex, whole name) and the class it gives. `where` locates it
 // in a body file for messages (empty when it comes from code).
 struct ClassPattern {
   std::string pattern;

@@ -26,14 +26,16 @@
 //       points: [{joint: LeftToeBase, end_site: true}]  # frames (f, next f): non-skid
 //       params: [1, 0, 1]
 //       frames: [40, 55]
-//   limits:                             # joint-name regular expression (whole name):
+//   limits:                             # joint-name regular expression (RE2, whole name):
 //     "[lr](femur|tibia)": {Xrotation: [-160, 20]}      #   {channel: [min, max]}
 //     "lfoot": {Xrotation: [-45, .inf]}                 # .inf / -.inf leave a side free
 //   limits_character: 0                 # optional: the character `limits` apply to
 //
+// `limits` patterns are RE2 syntax (kg/base/pattern.hpp, https://github.com/google/re2/wiki/Syntax:
+// no backreferences or lookaround), at most Pattern::kMaxLength bytes.
 // Every error names file:line:column: an unknown joint with the nearest name, a frame range out
 // of the clip or reversed, an unknown key with the nearest allowed one, a built-in kind's check
-// failing (wrong param count, ...).
+// failing (wrong param count, ...), a bad regular expression (a short excerpt of it).
 #pragma once
 
 #include <span>

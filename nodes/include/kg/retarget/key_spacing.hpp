@@ -41,6 +41,7 @@
 
 #include <Eigen/Core>
 
+#include "kg/base/pattern.hpp"
 #include "kg/motion/motion.hpp"
 
 namespace kg::retarget {
@@ -75,16 +76,18 @@ PyramidEnergy pyramid_energy(const motion::Motion& motion, const std::vector<int
 // exceeds the threshold, spacing 8).
 int spacing_for_energy(const PyramidEnergy& energy, double threshold, int* level = nullptr);
 
-// One `groups` item: joints whose name contains a match of `pattern` (std::regex_search, so
-// "Arm" matches LeftArm and LeftForeArm) take `spacing` frames (0: chosen automatically from
-// that group's channels alone).
+// One `groups` item: joints whose name contains a match of `pattern` (a regular expression in
+// RE2 syntax, kg/base/pattern.hpp, searched in the name: Pattern::partial_match, so "Arm"
+// matches LeftArm and LeftForeArm) take `spacing` frames (0: chosen automatically from that
+// group's channels alone).
 struct KeyGroup {
-  std::string pattern;
+  kg::Pattern pattern;
   int spacing = 0;
 };
 // "arm|hand|Arm|Hand=2; leg|Leg=8": items separated by ';', each regex=spacing (split at the
-// last '='; blanks around items trimmed). Throws std::invalid_argument naming the item for a
-// missing '=', a spacing that is not an integer >= 0, or a bad regular expression.
+// last '='; blanks around items trimmed), each pattern compiled once here. Throws
+// std::invalid_argument naming the item (a short excerpt of it) for a missing '=', a spacing
+// that is not an integer >= 0, or a bad regular expression (Pattern::compile's message).
 std::vector<KeyGroup> parse_key_groups(const std::string& text);
 
 struct KeySpacingOptions {

@@ -13,7 +13,7 @@
 // Target YAML files (parse_target_yaml; every error names file:line:column):
 //   version: 1
 //   default: 1.0                    # factor for joints no pattern matches (> 0; default 1)
-//   bones:                          # joint-name regex (std::regex_match: the WHOLE name): factor
+//   bones:                          # joint-name regex (the WHOLE name must match): factor
 //     "[lr](Shin|Foot)": 0.7        # patterns are tried in file order, the first match wins
 //     "abdomen|chest|neck": 1.2
 // or `lengths:` instead of `bones:`: absolute lengths (metres, > 0) of the joints' offsets from
@@ -27,6 +27,8 @@
 //     - time: 3.5
 //       bones: {"l.*": 0.6}         # or scale: (uniform) or lengths:; `default:` allowed too
 // Factors are interpolated linearly between keys and held before the first and after the last.
+// Patterns are RE2 syntax (kg/base/pattern.hpp, https://github.com/google/re2/wiki/Syntax: no
+// backreferences or lookaround), at most Pattern::kMaxLength bytes.
 // Unknown keys, bad regular expressions, non-positive or non-finite numbers, a pattern matching
 // no joint, a missing or wrong `version` are errors.
 #pragma once
