@@ -68,9 +68,10 @@ int main(int argc, char** argv) {
 
   std::printf("BVH reader, sibling joints (one End Site each, 3 channels, %d frames); best of runs\n",
               kFrames);
-  std::printf("parse s: kg::io::read_bvh, which reads the file (read s) and parses it into a Skeleton and\n"
-              "frames; no import conversions, no kinematics. Target: %d joints parsed in <= %.1f s\n",
-              kTargetJoints, kTargetSeconds);
+  std::printf(
+      "parse s: kg::io::read_bvh, which reads the file (read s) and parses it into a Skeleton and\n"
+      "frames; no import conversions, no kinematics. Target: %d joints parsed in <= %.1f s\n",
+      kTargetJoints, kTargetSeconds);
   std::printf("%10s %10s %10s %10s %10s %12s\n", "joints", "MB", "read s", "parse s", "parse/read",
               "us/joint");
   for (int joints : sizes) {
@@ -100,7 +101,7 @@ int main(int argc, char** argv) {
     }
     std::printf("%10d %10.1f %10.4f %10.4f %10.1f %12.3f%s\n", joints, mb, read_s, parse_s, parse_s / read_s,
                 1e6 * parse_s / joints,
-                joints != kTargetJoints ? ""
+                joints != kTargetJoints     ? ""
                 : parse_s <= kTargetSeconds ? "  (target met)"
                                             : "  (target missed)");
     std::fflush(stdout);

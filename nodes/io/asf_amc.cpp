@@ -381,8 +381,8 @@ class AsfParser {
   }
 
   // The fields of a bone; parse_bone keeps the line of each one seen in an array (no map per bone).
-  static constexpr std::array<std::string_view, 9> kBoneFields{
-      "id", "name", "direction", "length", "axis", "dof", "limits", "bodymass", "cofmass"};
+  static constexpr std::array<std::string_view, 9> kBoneFields{"id",  "name",   "direction", "length", "axis",
+                                                               "dof", "limits", "bodymass",  "cofmass"};
   static constexpr std::size_t field_index(std::string_view key) {
     std::size_t i = 0;
     while (i < kBoneFields.size() && kBoneFields[i] != key) ++i;

@@ -219,7 +219,8 @@ Eigen::Vector3d Parser::parse_offset(const char* owner_prefix, std::string_view 
   Eigen::Vector3d o;
   for (int i = 0; i < 3; ++i) {
     Token t = next_on_line();
-    o[i] = number_token(t, [&] { return std::string("OFFSET ") + "xyz"[i] + " of " + owner() + " (a number)"; });
+    o[i] =
+        number_token(t, [&] { return std::string("OFFSET ") + "xyz"[i] + " of " + owner() + " (a number)"; });
   }
   Token extra = next_on_line();
   if (!extra.text.empty()) fail(extra, "end of line after the 3 OFFSET values of " + owner());
@@ -306,7 +307,8 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
       parse_joint(index, k, depth + 1);
     } else if (iequals(k.text, "End")) {
       Token site = next_on_line();
-      if (!iequals(site.text, "Site")) fail(site, "'Site' after 'End' in joint " + skeleton_.joint(index).name);
+      if (!iequals(site.text, "Site"))
+        fail(site, "'Site' after 'End' in joint " + skeleton_.joint(index).name);
       // Some exporters name the End Site; the name is not kept.
       bool site_brace = false;
       for (Token w = next_on_line(); !w.text.empty(); w = next_on_line()) {
@@ -448,8 +450,8 @@ BvhClip Parser::parse() {
   constexpr long long kMinJointText = 24;
   const long long braces = std::count(p_, end_, '{');
   try {
-    skeleton_.reserve(static_cast<int>(std::min<long long>({braces, (end_ - p_) / kMinJointText + 1,
-                                                            std::numeric_limits<int>::max()})));
+    skeleton_.reserve(static_cast<int>(
+        std::min<long long>({braces, (end_ - p_) / kMinJointText + 1, std::numeric_limits<int>::max()})));
   } catch (const std::bad_alloc&) {
   }
   Token t = next();

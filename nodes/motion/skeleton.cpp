@@ -62,7 +62,8 @@ void check_joint(const Joint& joint, int joint_count, bool name_taken) {
   std::array<bool, 3> has_position{false, false, false};
   for (const Channel& c : joint.channels) {
     if (static_cast<int>(c.kind) > static_cast<int>(ChannelKind::Zrotation))
-      throw std::invalid_argument(who() + ": invalid channel kind " + std::to_string(static_cast<int>(c.kind)));
+      throw std::invalid_argument(who() + ": invalid channel kind " +
+                                  std::to_string(static_cast<int>(c.kind)));
     if (std::isnan(c.min) || std::isnan(c.max) || c.min > c.max)
       throw std::invalid_argument(who() + ": channel " + to_string(c.kind) + " has limits [" +
                                   std::to_string(c.min) + ", " + std::to_string(c.max) +
