@@ -9,6 +9,7 @@
 #include <array>
 #include <atomic>
 #include <cerrno>
+#include <cstdint>
 #include <cstring>
 #include <exception>
 #include <fstream>
@@ -122,10 +123,23 @@ std::string read_input_file(const fs::path& path, const std::string& what) {
   if (fs::is_directory(path, ec)) throw Error(what + " expected, got a directory", {path.string()});
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
-  std::ostringstream stream;
-  stream << in.rdbuf();
+  // A regular file is read in one call into a string of its size (a stream copy regrows its
+  // buffer and copies the text several times over: for a large clip, longer than parsing it);
+  // whatever the size did not cover (a file still growing, a special file of size 0) follows
+  // through the stream.
+  std::string text;
+  const std::uintmax_t size = fs::is_regular_file(path, ec) ? fs::file_size(path, ec) : 0;
+  if (!ec && size > 0 && size < text.max_size()) {
+    text.resize(static_cast<std::size_t>(size));
+    in.read(text.data(), static_cast<std::streamsize>(size));
+    text.resize(static_cast<std::size_t>(in.gcount()));
+  }
+  if (in.good()) {
+    std::ostringstream rest;
+    rest << in.rdbuf();
+    if (rest.tellp() > 0) text += std::move(rest).str();
+  }
   if (in.bad()) throw Error("cannot read " + what, {path.string()});
-  std::string text = std::move(stream).str();
   check_encoding(text, path.string(), what);
   const fs::path canonical = fs::weakly_canonical(path, ec);
   InputFiles& files = input_files();

@@ -161,15 +161,16 @@ bool parse_number(std::string_view text, double& out, bool allow_infinite = fals
   return allow_infinite || std::isfinite(out);
 }
 
-double number_at(const Lines& lines, std::size_t i, const std::string& what) {
+// `what` and `axis` make the message, built only on failure (these run for every bone).
+double number_at(const Lines& lines, std::size_t i, std::string_view what, const char* axis = "") {
   double v = 0;
-  if (i >= lines.size() || !parse_number(lines[i].text, v)) lines.expected(what, i);
+  if (i >= lines.size() || !parse_number(lines[i].text, v)) lines.expected(std::string(what) + axis, i);
   return v;
 }
 
-Eigen::Vector3d vector_at(const Lines& lines, std::size_t first, const std::string& what) {
-  return {number_at(lines, first, what + " x"), number_at(lines, first + 1, what + " y"),
-          number_at(lines, first + 2, what + " z")};
+Eigen::Vector3d vector_at(const Lines& lines, std::size_t first, std::string_view what) {
+  return {number_at(lines, first, what, " x"), number_at(lines, first + 1, what, " y"),
+          number_at(lines, first + 2, what, " z")};
 }
 
 // "XYZ" (any permutation, any case) -> axis indices in application order.
@@ -317,9 +318,9 @@ class AsfParser {
     }
   }
 
-  double positive_at(std::size_t i, const std::string& what) {
+  double positive_at(std::size_t i, std::string_view what) {
     double v = number_at(lines_, i, what);
-    if (!(v > 0)) lines_.expected(what, i);
+    if (!(v > 0)) lines_.expected(std::string(what), i);
     return v;
   }
 
@@ -383,11 +384,21 @@ class AsfParser {
     }
   }
 
+  // The fields of a bone; parse_bone keeps the line of each one seen in an array (no map per bone).
+  static constexpr std::array<std::string_view, 9> kBoneFields{"id",  "name",   "direction", "length", "axis",
+                                                               "dof", "limits", "bodymass",  "cofmass"};
+  static constexpr std::size_t field_index(std::string_view key) {
+    std::size_t i = 0;
+    while (i < kBoneFields.size() && kBoneFields[i] != key) ++i;
+    return i;  // kBoneFields.size() when not a field
+  }
+
   void parse_bone() {
     RawBone bone;
     bone.line = lines_.line();
     const int begin_line = lines_.line();
-    std::map<std::string, int> seen;
+    std::array<int, kBoneFields.size()> seen{};  // line of each field, 0 until seen
+    const auto was_seen = [&](std::string_view field) { return seen[field_index(field)] != 0; };
     for (;;) {
       if (!lines_.next() || lines_.is_section()) {
         lines_.expected("'end' of the bone begun at line " + std::to_string(begin_line), 0);
@@ -398,12 +409,13 @@ class AsfParser {
         break;
       }
       if (key == "begin") lines_.expected("'end' of the bone begun at line " + std::to_string(begin_line), 0);
-      if (seen.count(key)) {
+      const std::size_t field = field_index(key);
+      if (field < seen.size() && seen[field] != 0) {
         lines_.fail(lines_.line(), lines_[0].column,
                     "expected each bone field once, got a second " + show(key) + " (first at line " +
-                        std::to_string(seen[key]) + ")");
+                        std::to_string(seen[field]) + ")");
       }
-      seen[key] = lines_.line();
+      if (field < seen.size()) seen[field] = lines_.line();
       if (key == "id") {
         lines_.expect_count(2, "a bone id");
         double id = number_at(lines_, 1, "an integer bone id");
@@ -412,10 +424,10 @@ class AsfParser {
         lines_.expect_count(2, "a bone name");
         bone.name = std::string(lines_[1].text);
         if (bone.name == "root") lines_.expected("a bone name other than 'root'", 1);
-        if (bone_index_.count(bone.name)) {
+        if (const auto it = bone_index_.find(bone.name); it != bone_index_.end()) {
           lines_.fail(lines_.line(), lines_[1].column,
                       "expected a new bone name, got " + show(bone.name) + " again (first at line " +
-                          std::to_string(bones_[bone_index_[bone.name]].line) + ")");
+                          std::to_string(bones_[static_cast<std::size_t>(it->second)].line) + ")");
         }
       } else if (key == "direction") {
         lines_.expect_count(4, "three direction components");
@@ -443,7 +455,7 @@ class AsfParser {
           bone.dofs.push_back(*d);
         }
       } else if (key == "limits") {
-        if (!seen.count("dof")) lines_.expected("'dof' before 'limits'", 0);
+        if (!was_seen("dof")) lines_.expected("'dof' before 'limits'", 0);
         parse_limits(bone);
       } else if (key == "bodymass" || key == "cofmass") {
         lines_.expect_count(2, "a number after " + show(key));
@@ -458,14 +470,14 @@ class AsfParser {
       }
     }
     for (const char* required : {"name", "direction", "length", "axis"}) {
-      if (!seen.count(required)) {
+      if (!was_seen(required)) {
         lines_.fail(lines_.line(), lines_[0].column,
                     std::string("expected field '") + required + "' in the bone begun at line " +
                         std::to_string(begin_line) + ", got 'end'");
       }
     }
     if (!(bone.direction * bone.length).allFinite()) {
-      lines_.fail(seen["length"], 0,
+      lines_.fail(seen[field_index("length")], 0,
                   "expected a bone whose direction times length (its offset) is finite, got direction (" +
                       kg::text::significant(bone.direction.x()) + ", " +
                       kg::text::significant(bone.direction.y()) + ", " +
@@ -499,10 +511,10 @@ class AsfParser {
       }
     };
     refill(1);
-    auto expect_part = [&](const std::string& what) -> const Token& {
+    auto expect_part = [&](const auto& what) -> const Token& {
       while (next_part == parts.size()) {
         // Only whole pairs continue on the next line.
-        if (!lines_.next() || lines_.is_section() || lines_[0].text[0] != '(') lines_.expected(what, 0);
+        if (!lines_.next() || lines_.is_section() || lines_[0].text[0] != '(') lines_.expected(what(), 0);
         refill(0);
       }
       return parts[next_part++];
@@ -511,21 +523,22 @@ class AsfParser {
       lines_.fail(lines_.line(), t.column, "expected " + what + ", got " + show(t.text));
     };
     for (std::size_t k = 0; k < wanted; ++k) {
-      const std::string which = "limits of dof " + std::string(to_string(bone.dofs[k]));
-      const std::string open = "'(' opening the " + which;
+      // Messages built only on failure.
+      const auto which = [&] { return "limits of dof " + std::string(to_string(bone.dofs[k])); };
+      const auto open = [&] { return "'(' opening the " + which(); };
       const Token& a = expect_part(open);
-      if (a.text != "(") fail_part(a, open);
+      if (a.text != "(") fail_part(a, open());
       double lo = 0, hi = 0;
-      if (next_part == parts.size()) lines_.expected("the minimum of the " + which, lines_.size());
+      if (next_part == parts.size()) lines_.expected("the minimum of the " + which(), lines_.size());
       const Token& b = parts[next_part++];
-      if (!parse_number(b.text, lo, true)) fail_part(b, "the minimum of the " + which);
-      if (next_part == parts.size()) lines_.expected("the maximum of the " + which, lines_.size());
+      if (!parse_number(b.text, lo, true)) fail_part(b, "the minimum of the " + which());
+      if (next_part == parts.size()) lines_.expected("the maximum of the " + which(), lines_.size());
       const Token& c = parts[next_part++];
-      if (!parse_number(c.text, hi, true)) fail_part(c, "the maximum of the " + which);
-      if (next_part == parts.size()) lines_.expected("')' closing the " + which, lines_.size());
+      if (!parse_number(c.text, hi, true)) fail_part(c, "the maximum of the " + which());
+      if (next_part == parts.size()) lines_.expected("')' closing the " + which(), lines_.size());
       const Token& d = parts[next_part++];
-      if (d.text != ")") fail_part(d, "')' closing the " + which);
-      if (lo > hi) fail_part(b, "a minimum not above the maximum in the " + which);
+      if (d.text != ")") fail_part(d, "')' closing the " + which());
+      if (lo > hi) fail_part(b, "a minimum not above the maximum in the " + which());
       bone.limits.emplace_back(lo, hi);
     }
     if (next_part != parts.size()) {
@@ -597,6 +610,8 @@ class AsfParser {
 
   void build() {
     auto skeleton = std::make_shared<Skeleton>();
+    skeleton->reserve(static_cast<int>(bones_.size()) + 1);
+    result_.bones.reserve(bones_.size() + 1);
     const double a = angle_scale();
 
     // Root.
@@ -723,7 +738,7 @@ class AsfParser {
   Eigen::Vector3d root_position_ = Eigen::Vector3d::Zero();
   Eigen::Vector3d root_orientation_ = Eigen::Vector3d::Zero();
   std::vector<RawBone> bones_;
-  std::map<std::string, int> bone_index_;
+  std::unordered_map<std::string, int> bone_index_;
   std::vector<int> root_children_;
   std::vector<HierarchyLine> hierarchy_;
 };
@@ -778,6 +793,7 @@ motion::Motion parse_amc(std::string_view text, const std::string& path, const A
   // Bones with dofs, looked up by name on every line.
   std::unordered_map<std::string, int, NameHash, std::equal_to<>> index;
   std::vector<int> moving;  // indices into asf.bones of bones with dofs
+  index.reserve(asf.bones.size());
   for (std::size_t b = 0; b < asf.bones.size(); ++b) {
     index.emplace(asf.bones[b].name, static_cast<int>(b));
     if (!asf.bones[b].dofs.empty()) moving.push_back(static_cast<int>(b));

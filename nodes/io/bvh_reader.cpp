@@ -1,6 +1,7 @@
 // The BVH reader: one pass over the text in memory, numbers by std::from_chars, no stream per
 // token. The hierarchy is a small recursive-descent parser; the MOTION section, which is nearly
 // all of a file, is a tight loop writing straight into the frames matrix.
+#include <algorithm>
 #include <cerrno>
 #include <charconv>
 #include <cmath>
@@ -9,6 +10,8 @@
 #include <cstdlib>
 #include <cstring>
 #include <fstream>
+#include <limits>
+#include <new>
 #include <numbers>
 #include <stdexcept>
 
@@ -167,10 +170,12 @@ class Parser {
     return t;
   }
 
-  double number_token(const Token& t, const std::string& what) {
+  // `what()` builds the description of the number for a message, only when one is needed.
+  template <class What>
+  double number_token(const Token& t, const What& what) {
     double v = 0;
-    if (!parse_number(t.text, v)) fail(t, what);
-    if (!std::isfinite(v)) fail(t, "a finite number for " + what);
+    if (!parse_number(t.text, v)) fail(t, what());
+    if (!std::isfinite(v)) fail(t, "a finite number for " + what());
     return v;
   }
 
@@ -183,6 +188,7 @@ class Parser {
       if (b < e && (*b == '+' || *b == '-')) return false;
     }
     if (b == e) return false;
+    if (*b != '+' && parse_plain_decimal(b, e, v) == e) return true;  // as from_chars would
     auto [ptr, ec] = std::from_chars(b, e, v);
     if (ptr != e) return false;
     if (ec == std::errc::result_out_of_range)
@@ -194,7 +200,8 @@ class Parser {
 
   // --- grammar ---
   void parse_joint(int parent, const Token& keyword, int depth);
-  Eigen::Vector3d parse_offset(const std::string& owner);
+  // `owner` + `name` ("joint " + "Hips") names the OFFSET's owner in messages.
+  Eigen::Vector3d parse_offset(const char* owner, std::string_view name);
   void parse_motion(BvhClip& clip);
 
   const char* p_;
@@ -205,22 +212,27 @@ class Parser {
   motion::Skeleton skeleton_;
 };
 
-Eigen::Vector3d Parser::parse_offset(const std::string& owner) {
-  expect_keyword("OFFSET", "OFFSET of " + owner);
+Eigen::Vector3d Parser::parse_offset(const char* owner_prefix, std::string_view name) {
+  const auto owner = [&] { return owner_prefix + std::string(name); };
+  const Token keyword = next();
+  if (!iequals(keyword.text, "OFFSET")) fail(keyword, "OFFSET of " + owner());
   Eigen::Vector3d o;
   for (int i = 0; i < 3; ++i) {
     Token t = next_on_line();
-    o[i] = number_token(t, std::string("OFFSET ") + "xyz"[i] + " of " + owner + " (a number)");
+    o[i] =
+        number_token(t, [&] { return std::string("OFFSET ") + "xyz"[i] + " of " + owner() + " (a number)"; });
   }
   Token extra = next_on_line();
-  if (!extra.text.empty()) fail(extra, "end of line after the 3 OFFSET values of " + owner);
+  if (!extra.text.empty()) fail(extra, "end of line after the 3 OFFSET values of " + owner());
   return o;
 }
 
 void Parser::parse_joint(int parent, const Token& keyword, int depth) {
   if (depth > kMaxDepth) fail(keyword, "at most " + std::to_string(kMaxDepth) + " nested joints");
-  // The name is the rest of the line (names with blanks exist); a '{' may end it.
-  std::string name;
+  // The name is the rest of the line (names with blanks exist); a '{' may end it. It is read
+  // straight into the joint: the messages below name it from there.
+  motion::Joint joint;
+  std::string& name = joint.name;
   bool brace = false;
   const Token name_start = next_on_line();
   for (Token t = name_start; !t.text.empty(); t = next_on_line()) {
@@ -239,10 +251,8 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
     if (t.text != "{") fail(t, "'{' opening joint " + name);
   }
 
-  motion::Joint joint;
-  joint.name = name;
   joint.parent = parent;
-  joint.offset = parse_offset("joint " + name);
+  joint.offset = parse_offset("joint ", name);
 
   // CHANNELS n name... (all on one line); absent means none.
   const char* save_p = p_;
@@ -259,17 +269,19 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
       if (count_token.text.empty() || ec != std::errc() || ptr != e || n < 0 || n > 6)
         fail(count_token, "a channel count 0..6 after CHANNELS of joint " + name);
     }
+    joint.channels.reserve(static_cast<std::size_t>(n));
     for (int i = 0; i < n; ++i) {
       Token c = next_on_line();
-      const std::string which = "channel name " + std::to_string(i + 1) + " of " + std::to_string(n) +
-                                " of joint " + name +
-                                " (Xposition, Yposition, Zposition, Xrotation, "
-                                "Yrotation or Zrotation)";
-      if (c.text.empty()) fail(c, which);
+      const auto which = [&] {
+        return "channel name " + std::to_string(i + 1) + " of " + std::to_string(n) + " of joint " + name +
+               " (Xposition, Yposition, Zposition, Xrotation, "
+               "Yrotation or Zrotation)";
+      };
+      if (c.text.empty()) fail(c, which());
       std::optional<ChannelKind> kind = channel_from_name(c.text);
-      if (!kind) fail(c, which);
+      if (!kind) fail(c, which());
       for (const motion::Channel& seen : joint.channels)
-        if (seen.kind == *kind) fail(c, which + " not given twice");
+        if (seen.kind == *kind) fail(c, which() + " not given twice");
       joint.channels.push_back(motion::Channel{*kind});
     }
     Token extra = next_on_line();
@@ -282,6 +294,7 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
 
   if (skeleton_.find_joint(name) >= 0) fail(name_start, "a joint name not used before", shown(name));
   int index = 0;
+  // From here on the name is the added joint's (`name` refers to the moved-from one).
   try {
     index = skeleton_.add_joint(std::move(joint));
   } catch (const std::invalid_argument& e) {  // the reader checks all add_joint does; kept for safety
@@ -294,7 +307,8 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
       parse_joint(index, k, depth + 1);
     } else if (iequals(k.text, "End")) {
       Token site = next_on_line();
-      if (!iequals(site.text, "Site")) fail(site, "'Site' after 'End' in joint " + name);
+      if (!iequals(site.text, "Site"))
+        fail(site, "'Site' after 'End' in joint " + skeleton_.joint(index).name);
       // Some exporters name the End Site; the name is not kept.
       bool site_brace = false;
       for (Token w = next_on_line(); !w.text.empty(); w = next_on_line()) {
@@ -305,9 +319,9 @@ void Parser::parse_joint(int parent, const Token& keyword, int depth) {
       }
       if (!site_brace) {
         Token b = next();
-        if (b.text != "{") fail(b, "'{' opening the End Site of joint " + name);
+        if (b.text != "{") fail(b, "'{' opening the End Site of joint " + skeleton_.joint(index).name);
       }
-      Eigen::Vector3d tip = parse_offset("the End Site of joint " + skeleton_.joint(index).name);
+      Eigen::Vector3d tip = parse_offset("the End Site of joint ", skeleton_.joint(index).name);
       Token close = next();
       if (close.text != "}") fail(close, "'}' closing the End Site of joint " + skeleton_.joint(index).name);
       skeleton_.joint_mut(index).end_sites.push_back(tip);
@@ -335,7 +349,8 @@ void Parser::parse_motion(BvhClip& clip) {
   const Token time_kw = next_on_line();
   if (!iequals(time_kw.text, "Time:")) fail(time_kw, "'Time:' after 'Frame'");
   const Token time_token = next_on_line();
-  clip.frame_time = number_token(time_token, "a frame time in seconds after 'Frame Time:'");
+  clip.frame_time =
+      number_token(time_token, [] { return std::string("a frame time in seconds after 'Frame Time:'"); });
   if (!(clip.frame_time >= kBvhMinFrameTime && clip.frame_time <= kBvhMaxFrameTime))
     fail(time_token, "a frame time of 1e-06..3600 seconds (1e6 to 1/3600 frames per second)",
          shown(time_token.text));
@@ -428,6 +443,17 @@ void Parser::parse_motion(BvhClip& clip) {
 
 BvhClip Parser::parse() {
   expect_keyword("HIERARCHY", "HIERARCHY at the start of a BVH file");
+  // Every joint opens a '{', so the braces bound the joints (End Sites open one too): the
+  // skeleton is sized once instead of regrown joint by joint. A joint takes at least
+  // kMinJointText characters ("JOINT a { OFFSET 0 0 0 }"), which caps what a file of braces
+  // can reserve. Only a hint: a failure to reserve is not an error.
+  constexpr long long kMinJointText = 24;
+  const long long braces = std::count(p_, end_, '{');
+  try {
+    skeleton_.reserve(static_cast<int>(
+        std::min<long long>({braces, (end_ - p_) / kMinJointText + 1, std::numeric_limits<int>::max()})));
+  } catch (const std::bad_alloc&) {
+  }
   Token t = next();
   if (!iequals(t.text, "ROOT")) fail(t, "ROOT after HIERARCHY");
   for (;;) {

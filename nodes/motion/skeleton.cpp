@@ -4,6 +4,8 @@
 #include <array>
 #include <cctype>
 #include <cmath>
+#include <cstdint>
+#include <functional>
 #include <stdexcept>
 
 #include "kg/base/error.hpp"
@@ -28,36 +30,47 @@ std::string fmt_vector(const Eigen::Vector3d& v) {
   return "(" + std::to_string(v.x()) + ", " + std::to_string(v.y()) + ", " + std::to_string(v.z()) + ")";
 }
 
-// `name_taken`: whether another joint already has joint.name.
+std::size_t name_hash(std::string_view name) {
+  return std::hash<std::string_view>{}(name);
+}
+std::uint32_t name_tag(std::size_t hash) {
+  return static_cast<std::uint32_t>(static_cast<std::uint64_t>(hash) >> 32);
+}
+
+// `name_taken`: whether another joint already has joint.name. The messages are built only when
+// a check fails: this runs once per joint of every file read.
 void check_joint(const Joint& joint, int joint_count, bool name_taken) {
-  const std::string who = "joint '" + joint.name + "'";
+  const auto who = [&] { return "joint '" + joint.name + "'"; };
   if (joint.name.empty())
     throw std::invalid_argument("joint " + std::to_string(joint_count) + " has no name");
   if (joint.parent < -1 || joint.parent >= joint_count)
-    throw std::invalid_argument(who + ": parent " + std::to_string(joint.parent) +
+    throw std::invalid_argument(who() + ": parent " + std::to_string(joint.parent) +
                                 " does not exist (expected -1 or 0.." + std::to_string(joint_count - 1) +
                                 ")");
-  if (name_taken) throw std::invalid_argument(who + ": duplicate joint name");
+  if (name_taken) throw std::invalid_argument(who() + ": duplicate joint name");
   if (!joint.offset.allFinite())
-    throw std::invalid_argument(who + ": offset " + fmt_vector(joint.offset) + " is not finite");
-  if (!joint.axis.allFinite() ||
-      !(joint.axis * joint.axis.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-6) ||
-      !(joint.axis.determinant() > 0))
-    throw std::invalid_argument(who + ": axis is not a rotation matrix");
+    throw std::invalid_argument(who() + ": offset " + fmt_vector(joint.offset) + " is not finite");
+  // The identity (every joint but an ASF bone's) passes the rotation test; skip its arithmetic.
+  if (joint.axis != Eigen::Matrix3d::Identity() &&
+      (!joint.axis.allFinite() ||
+       !(joint.axis * joint.axis.transpose()).isApprox(Eigen::Matrix3d::Identity(), 1e-6) ||
+       !(joint.axis.determinant() > 0)))
+    throw std::invalid_argument(who() + ": axis is not a rotation matrix");
   for (const Eigen::Vector3d& e : joint.end_sites)
-    if (!e.allFinite()) throw std::invalid_argument(who + ": end site " + fmt_vector(e) + " is not finite");
+    if (!e.allFinite()) throw std::invalid_argument(who() + ": end site " + fmt_vector(e) + " is not finite");
 
   std::array<bool, 3> has_position{false, false, false};
   for (const Channel& c : joint.channels) {
     if (static_cast<int>(c.kind) > static_cast<int>(ChannelKind::Zrotation))
-      throw std::invalid_argument(who + ": invalid channel kind " + std::to_string(static_cast<int>(c.kind)));
+      throw std::invalid_argument(who() + ": invalid channel kind " +
+                                  std::to_string(static_cast<int>(c.kind)));
     if (std::isnan(c.min) || std::isnan(c.max) || c.min > c.max)
-      throw std::invalid_argument(who + ": channel " + to_string(c.kind) + " has limits [" +
+      throw std::invalid_argument(who() + ": channel " + to_string(c.kind) + " has limits [" +
                                   std::to_string(c.min) + ", " + std::to_string(c.max) +
                                   "] (expected min <= max)");
     if (!is_rotation(c.kind)) {
       bool& seen = has_position[static_cast<std::size_t>(axis_index(c.kind))];
-      if (seen) throw std::invalid_argument(who + ": channel " + to_string(c.kind) + " appears twice");
+      if (seen) throw std::invalid_argument(who() + ": channel " + to_string(c.kind) + " appears twice");
       seen = true;
     }
   }
@@ -77,25 +90,56 @@ std::optional<ChannelKind> channel_kind_from_string(const std::string& bvh_name)
   return std::nullopt;
 }
 
+std::size_t Skeleton::index_slot(std::string_view name, std::size_t hash) const {
+  const std::size_t mask = index_.size() - 1;
+  const std::uint32_t tag = name_tag(hash);
+  for (std::size_t i = hash & mask;; i = (i + 1) & mask) {
+    const IndexSlot& slot = index_[i];
+    if (slot.joint < 0) return i;
+    if (slot.tag == tag && joints_[static_cast<std::size_t>(slot.joint)].name == name) return i;
+  }
+}
+
+void Skeleton::grow_index(std::size_t joints) {
+  std::size_t size = 16;
+  while (size < 2 * joints) size *= 2;
+  if (size <= index_.size()) return;
+  std::vector<IndexSlot> table(size);  // allocated before anything changes
+  const std::size_t mask = size - 1;
+  for (std::size_t j = 0; j < joints_.size(); ++j) {
+    const std::size_t hash = name_hash(joints_[j].name);
+    std::size_t i = hash & mask;
+    while (table[i].joint >= 0) i = (i + 1) & mask;
+    table[i] = {name_tag(hash), static_cast<std::int32_t>(j)};
+  }
+  index_ = std::move(table);
+}
+
+void Skeleton::reserve(int joints) {
+  if (joints <= 0) return;
+  joints_.reserve(static_cast<std::size_t>(joints));
+  grow_index(static_cast<std::size_t>(joints));
+}
+
 int Skeleton::add_joint(Joint joint) {
-  check_joint(joint, joint_count(), index_.contains(joint.name));
+  const std::size_t hash = name_hash(joint.name);
+  check_joint(joint, joint_count(), !index_.empty() && index_[index_slot(joint.name, hash)].joint >= 0);
   const int index = joint_count();
+  // Room first (the index for one more name, the joint vector by push_back): a bad_alloc leaves
+  // the skeleton as it was.
+  grow_index(joints_.size() + 1);
+  const std::size_t slot = index_slot(joint.name, hash);
   joint.first_channel = channel_count_;
   const int channels = static_cast<int>(joint.channels.size());
   joints_.push_back(std::move(joint));
-  try {
-    index_.emplace(joints_.back().name, index);
-  } catch (...) {  // out of memory: leave the skeleton as it was
-    joints_.pop_back();
-    throw;
-  }
+  index_[slot] = {name_tag(hash), index};
   channel_count_ += channels;
   return index;
 }
 
-int Skeleton::find_joint(const std::string& name) const {
-  const auto it = index_.find(name);
-  return it == index_.end() ? -1 : it->second;
+int Skeleton::find_joint(std::string_view name) const {
+  if (index_.empty()) return -1;
+  return index_[index_slot(name, name_hash(name))].joint;
 }
 
 std::pair<int, int> Skeleton::channel_owner(int channel) const {

@@ -19,7 +19,7 @@
 #include <limits>
 #include <optional>
 #include <string>
-#include <unordered_map>
+#include <string_view>
 #include <vector>
 
 #include <Eigen/Geometry>
@@ -61,8 +61,12 @@ class Skeleton {
  public:
   // Appends a joint; its parent must already exist. Sets first_channel. Returns its index.
   // Throws std::invalid_argument on a bad parent or a duplicate name. Constant time on average
-  // (names are kept in a hash index), so building a skeleton is linear in its joints.
+  // (names are kept in a hash index), so building a skeleton is linear in its joints. On a throw
+  // the skeleton is left as it was.
   int add_joint(Joint joint);
+  // Room for `joints` joints in all, so that adding that many moves no joint and regrows no
+  // index; a hint for readers that know (or can bound) the count up front.
+  void reserve(int joints);
 
   const std::vector<Joint>& joints() const { return joints_; }
   const Joint& joint(int index) const { return joints_[static_cast<std::size_t>(index)]; }
@@ -72,7 +76,7 @@ class Skeleton {
   int joint_count() const { return static_cast<int>(joints_.size()); }
   int channel_count() const { return channel_count_; }
   // -1 when absent. Constant time on average.
-  int find_joint(const std::string& name) const;
+  int find_joint(std::string_view name) const;
   // The joint owning frame channel `channel`, and that channel's index within the joint.
   std::pair<int, int> channel_owner(int channel) const;
   // "hip.Xrotation".
@@ -88,8 +92,21 @@ class Skeleton {
   double rest_height() const;
 
  private:
+  // The name index: open addressing with linear probing over a power-of-two table at most half
+  // full, one flat array (no allocation per joint, unlike a node-based map). A slot holds the
+  // upper bits of its name's hash (compared before the name) and the joint's index, -1 if empty.
+  struct IndexSlot {
+    std::uint32_t tag = 0;
+    std::int32_t joint = -1;
+  };
+  // The slot holding `name` (hash `hash`), else the empty slot where it would go; the table must
+  // not be empty.
+  std::size_t index_slot(std::string_view name, std::size_t hash) const;
+  // Makes the table room for `joints` names at most half full (rehashing what it holds).
+  void grow_index(std::size_t joints);
+
   std::vector<Joint> joints_;
-  std::unordered_map<std::string, int> index_;  // joint name -> index in joints_
+  std::vector<IndexSlot> index_;
   int channel_count_ = 0;
 };
 
