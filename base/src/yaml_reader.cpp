@@ -54,8 +54,8 @@ class DocumentCheck {
         if (it->first.IsScalar()) {
           const auto [first, inserted] = keys.emplace(it->first.Scalar(), it->first.Mark());
           if (!inserted)
-            throw Error("duplicate key " + text::excerpt(it->first.Scalar()) + " " +
-                            where() + " (first at " + located(path_, first->second).to_string() + ")",
+            throw Error("duplicate key " + text::excerpt(it->first.Scalar()) + " " + where() + " (first at " +
+                            located(path_, first->second).to_string() + ")",
                         located(path_, it->first.Mark()));
           path_keys_.push_back({it->first.Scalar(), -1});
         } else {

@@ -213,8 +213,7 @@ class Variables {
       }
       const std::size_t close = text.find('}', i + 2);
       if (close == std::string::npos)
-        loader_.fail("unterminated '${' in " + text::excerpt(text) +
-                         " (write $$ for a literal dollar)",
+        loader_.fail("unterminated '${' in " + text::excerpt(text) + " (write $$ for a literal dollar)",
                      where);
       const std::string name = text.substr(i + 2, close - i - 2);
       if (!is_identifier(name, false))
@@ -224,9 +223,9 @@ class Variables {
                      where);
       const std::string& value = lookup(name, where);
       if (out.size() + value.size() > kMaxExpandedBytes)
-        loader_.fail("expanding " + text::excerpt(text) + " gives over " +
-                         std::to_string(kMaxExpandedBytes) + " bytes (the limit of a text after " +
-                         "${...} expansion) at ${" + name + "} (" + std::to_string(value.size()) + " bytes)",
+        loader_.fail("expanding " + text::excerpt(text) + " gives over " + std::to_string(kMaxExpandedBytes) +
+                         " bytes (the limit of a text after " + "${...} expansion) at ${" + name + "} (" +
+                         std::to_string(value.size()) + " bytes)",
                      where);
       out += value;
       i = close;

@@ -37,7 +37,6 @@ inline std::string significant(double x, int digits = 6) {
   return buf;
 }
 
-
 // `text` quoted for a message whatever its length and bytes (a user's pattern, the start of a
 // file that is not what it should be): in single quotes like in_quotes, printable ASCII and
 // valid UTF-8 characters as they are, every other byte (controls, DEL, C1 controls, bytes of no
