@@ -844,8 +844,12 @@ std::vector<PluginEntry> read_graph_plugins(const fs::path& file,
 }
 
 std::vector<Variable> read_graph_variables(const fs::path& file) {
-  const std::string text = read_text(file);
-  Loader L(file.string());
+  return read_graph_variables_from_string(read_text(file), file.string());
+}
+
+std::vector<Variable> read_graph_variables_from_string(const std::string& text,
+                                                       const std::string& file_name) {
+  Loader L(file_name);
   Variables vars(L);
   read_declarations(L, vars, text);
   return vars.declared();

@@ -19,6 +19,7 @@
 #include "kg/io/bvh.hpp"
 #include "kg/io/nodes.hpp"
 #include "kg/motion/kinematics.hpp"
+#include "test_asf_amc_data.hpp"
 
 namespace fs = std::filesystem;
 using kg::Error;
@@ -53,61 +54,9 @@ std::string replaced(std::string text, const std::string& from, const std::strin
   return text.replace(at, from.size(), to);
 }
 
-// A small valid pair, the base of the malformed-input table.
-const std::string kAsf =
-    "# a tiny figure\n"
-    ":version 1.10\n"
-    ":name tiny\n"
-    ":units\n"
-    "  mass 1.0\n"
-    "  length 0.45\n"
-    "  angle deg\n"
-    ":documentation\n"
-    "   two bones\n"
-    ":root\n"
-    "   order TX TY TZ RX RY RZ\n"
-    "   axis XYZ\n"
-    "   position 0 0 0\n"
-    "   orientation 0 0 0\n"
-    ":bonedata\n"
-    "  begin\n"
-    "     id 1\n"
-    "     name lfemur\n"
-    "     direction 0 -1 0\n"
-    "     length 7\n"
-    "     axis 0 0 20 XYZ\n"
-    "    dof rx ry rz\n"
-    "    limits (-160.0 20.0)\n"
-    "           (-70.0 70.0)\n"
-    "           (-60.0 70.0)\n"
-    "  end\n"
-    "  begin\n"
-    "     id 2\n"
-    "     name ltibia\n"
-    "     direction 0 -1 0\n"
-    "     length 7\n"
-    "     axis 0 0 20 XYZ\n"
-    "    dof rx\n"
-    "    limits (-10.0 170.0)\n"
-    "  end\n"
-    ":hierarchy\n"
-    "  begin\n"
-    "    root lfemur\n"
-    "    lfemur ltibia\n"
-    "  end\n";
-
-const std::string kAmc =
-    "#!OML:ASF tiny.asf\n"
-    ":FULLY-SPECIFIED\n"
-    ":DEGREES\n"
-    "1\n"
-    "root 0 17 0 0 0 0\n"
-    "lfemur 10 0 0\n"
-    "ltibia 20\n"
-    "2\n"
-    "ltibia 21\n"
-    "root 0 17 0 1 2 3\n"
-    "lfemur 11 0 0\n";
+// A small valid pair (test_asf_amc_data.hpp), the base of the malformed-input table.
+const std::string& kAsf = kg::test::kTinyAsf;
+const std::string& kAmc = kg::test::kTinyAmc;
 
 // Line and message of the Error `f` throws; fails the test if it throws anything else.
 template <class F>

@@ -48,6 +48,8 @@ std::vector<PluginEntry> read_graph_plugins(const std::filesystem::path& file,
 // The variables a graph file declares, in file order, none resolved (batch passes a graph only
 // the variables it declares). Throws Error as load_graph does for a malformed head.
 std::vector<Variable> read_graph_variables(const std::filesystem::path& file);
+// The same for a graph's text; `file_name` names it in messages.
+std::vector<Variable> read_graph_variables_from_string(const std::string& text, const std::string& file_name);
 
 // Loads and validates. `overrides` are --set values; one naming no declared variable is an
 // Error. Node objects are created through `registry`.
