@@ -54,7 +54,6 @@ int ConstraintSet::character_count() const {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 // Smoothing of norms: sqrt(|v|^2 + kNormEps2) stays differentiable at 0 and differs from |v| by
 // under 1e-11 m beyond a millimetre.
 constexpr double kNormEps2 = 1e-12;

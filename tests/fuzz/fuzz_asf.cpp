@@ -19,7 +19,8 @@ void check_bones(const kg::io::AsfSkeleton& asf) {
   for (const kg::io::AsfBone& bone : asf.bones) {
     require(bone.joint >= 0 && bone.joint < s.joint_count(), "bone " + bone.name + " has no joint");
     require(bone.targets.size() == bone.dofs.size(), "bone " + bone.name + " has dofs without targets");
-    for (int target : bone.targets) require(target >= 0 && target < s.channel_count(), "bone " + bone.name + " targets no channel");
+    for (int target : bone.targets)
+      require(target >= 0 && target < s.channel_count(), "bone " + bone.name + " targets no channel");
   }
 }
 

@@ -12,13 +12,15 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   kg::fuzz::expect_clean("fuzz.yaml", [&] {
-    const kg::body::LoadedBodySpec loaded = kg::body::parse_body_yaml(kg::fuzz::text(data, size), "fuzz.yaml");
+    const kg::body::LoadedBodySpec loaded =
+        kg::body::parse_body_yaml(kg::fuzz::text(data, size), "fuzz.yaml");
     const kg::motion::Motion& clip = kg::fuzz::walk();
     const kg::body::BuiltBody built = kg::body::build_body_model(clip.skeleton, loaded.spec);
     kg::body::check_body_model(built.body);
     const double mass = built.body.total_mass();
     kg::fuzz::require(std::isfinite(mass) && mass > 0, "a body of total mass " + std::to_string(mass));
-    kg::fuzz::require(kg::body::body_com(built.body, clip.values.row(0)).allFinite(), "a centre of mass not finite");
+    kg::fuzz::require(kg::body::body_com(built.body, clip.values.row(0)).allFinite(),
+                      "a centre of mass not finite");
   });
   return 0;
 }

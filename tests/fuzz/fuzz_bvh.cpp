@@ -45,20 +45,23 @@ void check_round_trip(const kg::io::BvhClip& clip) {
     require(a.name == b.name && a.parent == b.parent, "joint " + a.name + " written as " + b.name);
     require(a.channels.size() == b.channels.size(), "joint " + a.name + " written with other channels");
     for (std::size_t c = 0; c < a.channels.size(); ++c)
-      require(a.channels[c].kind == b.channels[c].kind, "joint " + a.name + " written with another channel order");
+      require(a.channels[c].kind == b.channels[c].kind,
+              "joint " + a.name + " written with another channel order");
     require(a.end_sites.size() == b.end_sites.size(), "joint " + a.name + " written with other End Sites");
     for (int i = 0; i < 3; ++i) {
       require(within_print(a.offset[i], b.offset[i], 1), "joint " + a.name + "'s offset not kept");
       largest = std::max(largest, std::abs(a.offset[i]));
       for (std::size_t e = 0; e < a.end_sites.size(); ++e) {
-        require(within_print(a.end_sites[e][i], b.end_sites[e][i], 1), "an End Site of " + a.name + " not kept");
+        require(within_print(a.end_sites[e][i], b.end_sites[e][i], 1),
+                "an End Site of " + a.name + " not kept");
         largest = std::max(largest, std::abs(a.end_sites[e][i]));
       }
     }
   }
   for (int c = 0; c < s.channel_count(); ++c) {
     const auto [joint, index] = s.channel_owner(c);
-    const bool rotation = kg::motion::is_rotation(s.joint(joint).channels[static_cast<std::size_t>(index)].kind);
+    const bool rotation =
+        kg::motion::is_rotation(s.joint(joint).channels[static_cast<std::size_t>(index)].kind);
     const double scale = rotation ? 180 / std::numbers::pi : 1;  // printed in degrees
     for (int f = 0; f < m.frame_count(); ++f) {
       require(within_print(m.values(f, c), again.motion.values(f, c), scale),

@@ -30,15 +30,17 @@ void check_set(const kg::retarget::ConstraintSet& set) {
   for (const kg::retarget::Constraint& c : set.constraints) {
     const std::string who = "constraint '" + c.label + "' (" + c.kind + ")";
     for (const kg::motion::PointRef& p : c.points)
-      require(p.character == 0 && p.joint >= 0 && p.joint < clip.skeleton->joint_count() && p.local.allFinite(),
-              who + ": a point outside the skeleton");
+      require(
+          p.character == 0 && p.joint >= 0 && p.joint < clip.skeleton->joint_count() && p.local.allFinite(),
+          who + ": a point outside the skeleton");
     for (const kg::retarget::ChannelRef& ch : c.channels)
       require(ch.character == 0 && ch.channel >= 0 && ch.channel < clip.skeleton->channel_count(),
               who + ": a channel outside the skeleton");
     require(no_nan(c.params) && std::isfinite(c.weight), who + ": a NaN param or a weight not finite");
     for (const kg::retarget::Sample& s : c.samples) {
       require(s.frames.size() == c.points.size() + c.channels.size(), who + ": a sample of the wrong shape");
-      for (int f : s.frames) require(f >= 0 && f < clip.frame_count(), who + ": frame " + std::to_string(f) + " outside the clip");
+      for (int f : s.frames)
+        require(f >= 0 && f < clip.frame_count(), who + ": frame " + std::to_string(f) + " outside the clip");
       require(no_nan(s.params), who + ": a NaN sample param");
     }
     const kg::retarget::ConstraintKind* kind = kinds.find(c.kind);
@@ -55,8 +57,8 @@ void check_set(const kg::retarget::ConstraintSet& set) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(kg::fuzz::text(data, size));
   kg::fuzz::expect_clean("fuzz.yaml", [&] {
-    check_set(kg::retarget::read_constraints_string(text, "fuzz.yaml",
-                                                    std::span<const kg::motion::Motion>(&kg::fuzz::walk(), 1)));
+    check_set(kg::retarget::read_constraints_string(
+        text, "fuzz.yaml", std::span<const kg::motion::Motion>(&kg::fuzz::walk(), 1)));
   });
   return 0;
 }

@@ -26,7 +26,8 @@ void check_contacts(const kg::retime::Contacts& c) {
     for (const kg::retime::ContactPoint& point : frame.points) {
       require(point.patch >= 0 && point.patch < static_cast<int>(c.patches.size()), "a point of no patch");
       require(point.vertex >= 0 &&
-                  point.vertex < static_cast<int>(c.patches[static_cast<std::size_t>(point.patch)].vertices.size()),
+                  point.vertex <
+                      static_cast<int>(c.patches[static_cast<std::size_t>(point.patch)].vertices.size()),
               "a point of no vertex");
       require(point.world.allFinite(), "a touching point not finite");
       require(point.jacobian.cols() == c.channel_count() && point.jacobian.allFinite(),
@@ -39,7 +40,8 @@ void check_contacts(const kg::retime::Contacts& c) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(kg::fuzz::text(data, size));
-  kg::fuzz::expect_clean("fuzz.yaml",
-                         [&] { check_contacts(kg::retime::read_contacts_string(text, "fuzz.yaml", kg::fuzz::walk())); });
+  kg::fuzz::expect_clean("fuzz.yaml", [&] {
+    check_contacts(kg::retime::read_contacts_string(text, "fuzz.yaml", kg::fuzz::walk()));
+  });
   return 0;
 }

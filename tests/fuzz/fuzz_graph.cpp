@@ -35,7 +35,8 @@ void check_graph(const kg::graph::Graph& g) {
   for (const kg::graph::Variable& v : g.variables) {
     const auto it = g.values.find(v.name);
     require(it != g.values.end(), "variable " + v.name + " has no value");
-    require(it->second.size() <= kg::graph::kMaxExpandedBytes, "variable " + v.name + " over the expansion limit");
+    require(it->second.size() <= kg::graph::kMaxExpandedBytes,
+            "variable " + v.name + " over the expansion limit");
   }
 }
 

@@ -4,8 +4,8 @@
 // the input and a replay (replay_main.cpp) fails with the message.
 //
 //   extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-//     kg::fuzz::expect_clean("x.bvh", [&] { check(kg::io::parse_bvh(kg::fuzz::text(data, size), "x.bvh")); });
-//     return 0;
+//     kg::fuzz::expect_clean("x.bvh", [&] { check(kg::io::parse_bvh(kg::fuzz::text(data, size), "x.bvh"));
+//     }); return 0;
 //   }
 #pragma once
 
@@ -68,13 +68,14 @@ inline void check_skeleton(const motion::Skeleton& s) {
   int channel = 0;
   for (int j = 0; j < s.joint_count(); ++j) {
     const motion::Joint& joint = s.joint(j);
-    require(joint.parent >= -1 && joint.parent < j, "joint " + joint.name + " has parent " +
-                                                        std::to_string(joint.parent) + " not before it");
+    require(joint.parent >= -1 && joint.parent < j,
+            "joint " + joint.name + " has parent " + std::to_string(joint.parent) + " not before it");
     require(joint.first_channel == channel, "joint " + joint.name + " channels not contiguous");
     channel += static_cast<int>(joint.channels.size());
     require(s.find_joint(joint.name) == j, "joint name '" + joint.name + "' not found at its index");
     require(joint.offset.allFinite() && joint.axis.allFinite(), "joint " + joint.name + " not finite");
-    for (const auto& e : joint.end_sites) require(e.allFinite(), "an End Site of " + joint.name + " not finite");
+    for (const auto& e : joint.end_sites)
+      require(e.allFinite(), "an End Site of " + joint.name + " not finite");
   }
   require(channel == s.channel_count(), "channel_count disagrees with the joints' channels");
   require(s.file_to_world.allFinite() && std::isfinite(s.source_unit_metres) && s.source_unit_metres > 0,

@@ -37,11 +37,13 @@ void check_target(const kg::retarget::LoadedTarget& loaded) {
   std::vector<double> times{0.0};
   for (std::size_t k = 0; k < target.key_times.size(); ++k) {
     times.push_back(target.key_times[k]);
-    if (k + 1 < target.key_times.size()) times.push_back(0.5 * (target.key_times[k] + target.key_times[k + 1]));
+    if (k + 1 < target.key_times.size())
+      times.push_back(0.5 * (target.key_times[k] + target.key_times[k + 1]));
   }
   for (double t : times) {
     const double scale = target.overall_scale(t);
-    require(std::isfinite(scale) && scale > 0, "overall scale " + std::to_string(scale) + " at t = " + std::to_string(t));
+    require(std::isfinite(scale) && scale > 0,
+            "overall scale " + std::to_string(scale) + " at t = " + std::to_string(t));
     check_target_skeleton(*target.skeleton_at(t), source);
   }
 }
@@ -50,7 +52,8 @@ void check_target(const kg::retarget::LoadedTarget& loaded) {
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   kg::fuzz::expect_clean("fuzz.yaml", [&] {
-    check_target(kg::retarget::parse_target_yaml(kg::fuzz::walk().skeleton, kg::fuzz::text(data, size), "fuzz.yaml"));
+    check_target(
+        kg::retarget::parse_target_yaml(kg::fuzz::walk().skeleton, kg::fuzz::text(data, size), "fuzz.yaml"));
   });
   return 0;
 }

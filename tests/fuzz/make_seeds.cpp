@@ -38,7 +38,8 @@ std::string read(const fs::path& p) {
 }
 
 // Files of `dir` (recursively) with extension `ext`, sorted, as seeds named after their path.
-void seed_files(const std::string& harness, const fs::path& root, const fs::path& dir, const std::string& ext) {
+void seed_files(const std::string& harness, const fs::path& root, const fs::path& dir,
+                const std::string& ext) {
   std::vector<fs::path> files;
   for (const auto& e : fs::recursive_directory_iterator(root / dir))
     if (e.is_regular_file() && e.path().extension() == ext) files.push_back(e.path());
@@ -69,7 +70,8 @@ void bvh_seeds(const kg::motion::Motion& walk) {
   seed("bvh", "tabs.bvh", replaced_all(text, "  ", "\t"));
   seed("bvh", "bom.bvh", "\xEF\xBB\xBF" + text);
   seed("bvh", "lower_case.bvh",
-       replaced_all(replaced_all(replaced_all(text, "JOINT", "joint"), "End Site", "end site"), "OFFSET", "offset"));
+       replaced_all(replaced_all(replaced_all(text, "JOINT", "joint"), "End Site", "end site"), "OFFSET",
+                    "offset"));
   seed("bvh", "no_frames.bvh", text.substr(0, text.find("Frames:")) + "Frames: 0\nFrame Time: 0.0333333\n");
   seed("bvh", "two_roots.bvh",
        "HIERARCHY\nROOT a\n{\n  OFFSET 0 0 0\n  CHANNELS 6 Xposition Yposition Zposition Zrotation Xrotation "
@@ -86,12 +88,14 @@ void asf_amc_seeds() {
   seed("asf", "tiny_crlf.asf", replaced_all(asf, "\n", "\r\n"));
   seed("asf", "tiny_radians.asf", replaced_all(asf, "angle deg", "angle rad"));
   seed("asf", "tiny_translating.asf",
-       replaced_all(asf, "dof rx\n    limits (-10.0 170.0)\n", "dof rx tx ty tz\n    limits (-10.0 170.0)\n"
-                                                             "           (-inf inf)\n (-1 1)\n (-1 1)\n"));
+       replaced_all(asf, "dof rx\n    limits (-10.0 170.0)\n",
+                    "dof rx tx ty tz\n    limits (-10.0 170.0)\n"
+                    "           (-inf inf)\n (-1 1)\n (-1 1)\n"));
   seed("amc", "tiny.amc", amc);
   seed("amc", "tiny_crlf.amc", replaced_all(amc, "\n", "\r\n"));
   seed("amc", "tiny_radians.amc", replaced_all(amc, ":DEGREES", ":RADIANS"));
-  seed("amc", "tiny_one_frame.amc", ":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 17 0 0 0 0\nlfemur 10 0 0\nltibia 20\n");
+  seed("amc", "tiny_one_frame.amc",
+       ":FULLY-SPECIFIED\n:DEGREES\n1\nroot 0 17 0 0 0 0\nlfemur 10 0 0\nltibia 20\n");
 }
 
 // Files about the synthesized walk (kg::fuzz::walk(): two steps at 30 fps).
@@ -101,40 +105,60 @@ void clip_file_seeds(const kg::motion::Motion& walk) {
   seed("contacts", "frames.yaml",
        "version: 1\ndoc: both feet\npatches:\n  - name: left sole\n    joint: LeftFoot\n"
        "    vertices: [[0, -0.07, -0.05], [0.04, -0.07, 0.1], [-0.04, -0.07, 0.1]]\n"
-       "    frames: [[0, " + mid + "], [" + mid + ", " + end + "]]\n  - joint: RightToeBase\n"
-       "    vertices: [[0, 0, 0.03]]\n    frames: [2, " + mid + "]\n");
-  seed("contacts", "times.yaml",
-       "version: 1\npatches:\n  - {joint: LeftToeBase, vertices: [[0, 0, 0]], times: [[0, 0.3], [0.5, 0.9]]}\n"
-       "  - {joint: RightHand, vertices: [[0, -0.08, 0]], times: [0.1, 0.2]}\n");
+       "    frames: [[0, " +
+           mid + "], [" + mid + ", " + end +
+           "]]\n  - joint: RightToeBase\n"
+           "    vertices: [[0, 0, 0.03]]\n    frames: [2, " +
+           mid + "]\n");
+  seed(
+      "contacts", "times.yaml",
+      "version: 1\npatches:\n  - {joint: LeftToeBase, vertices: [[0, 0, 0]], times: [[0, 0.3], [0.5, 0.9]]}\n"
+      "  - {joint: RightHand, vertices: [[0, -0.08, 0]], times: [0.1, 0.2]}\n");
 
-  seed("constraints", "kinds.yaml",
-       "version: 1\ndoc: every built-in kind on the walk\nconstraints:\n"
-       "  - kind: position\n    label: \"left toe\"\n    points: [{joint: LeftToeBase, offset: [0, 0, 0.05]}]\n"
-       "    params: [0.1, 0, 0.3]\n    frames: [0, " + mid + "]\n"
-       "  - kind: same_place\n    points: [{joint: RightToeBase, end_site: true}]\n    params: [1, 0, 1]\n"
-       "    frames: [1, 5]\n"
-       "  - kind: region\n    points: [{joint: LeftFoot}]\n"
-       "    params: [-1, 0, -1, 1, 2, 1]\n    at_frames: [3, 9, " + end + "]\n"
-       "  - kind: parameter_range\n    channels: [\"LeftLeg.Xrotation\"]\n    params: [-1, 1]\n    times: [0.1, 0.4]\n"
-       "    weight: 2.0\n  - {kind: parameter_range, channels: [{joint: Hips, channel: Yposition}], params: [0.9], "
-       "frames: [0, 1]}\n"
-       "  - kind: distance\n    relation: at_most\n    points: [{joint: LeftHand}, {joint: RightHand, frame_offset: 1}]\n"
-       "    params: [0.5]\n    at_times: [0.2, 0.6]\n"
-       "limits:\n  \"(Left|Right)(Leg|UpLeg)\": {Xrotation: [-160, 20]}\n  \"LeftFoot\": {Xrotation: [-45, .inf]}\n"
-       "limits_character: 0\n");
+  seed(
+      "constraints", "kinds.yaml",
+      "version: 1\ndoc: every built-in kind on the walk\nconstraints:\n"
+      "  - kind: position\n    label: \"left toe\"\n    points: [{joint: LeftToeBase, offset: [0, 0, "
+      "0.05]}]\n"
+      "    params: [0.1, 0, 0.3]\n    frames: [0, " +
+          mid +
+          "]\n"
+          "  - kind: same_place\n    points: [{joint: RightToeBase, end_site: true}]\n    params: [1, 0, 1]\n"
+          "    frames: [1, 5]\n"
+          "  - kind: region\n    points: [{joint: LeftFoot}]\n"
+          "    params: [-1, 0, -1, 1, 2, 1]\n    at_frames: [3, 9, " +
+          end +
+          "]\n"
+          "  - kind: parameter_range\n    channels: [\"LeftLeg.Xrotation\"]\n    params: [-1, 1]\n    times: "
+          "[0.1, 0.4]\n"
+          "    weight: 2.0\n  - {kind: parameter_range, channels: [{joint: Hips, channel: Yposition}], "
+          "params: [0.9], "
+          "frames: [0, 1]}\n"
+          "  - kind: distance\n    relation: at_most\n    points: [{joint: LeftHand}, {joint: RightHand, "
+          "frame_offset: 1}]\n"
+          "    params: [0.5]\n    at_times: [0.2, 0.6]\n"
+          "limits:\n  \"(Left|Right)(Leg|UpLeg)\": {Xrotation: [-160, 20]}\n  \"LeftFoot\": {Xrotation: "
+          "[-45, .inf]}\n"
+          "limits_character: 0\n");
   seed("constraints", "orientation_and_path.yaml",
-       "version: 1\nconstraints:\n  - {kind: orientation, points: [{joint: Head}, {joint: Neck}], params: [0, 1, 0], "
-       "frames: [0, 3]}\n  - {kind: follow_path, points: [{joint: LeftHand}, {joint: Hips}], params: [0, 1, 0, 1, 1, 0], frames: [2, 8]}\n");
+       "version: 1\nconstraints:\n  - {kind: orientation, points: [{joint: Head}, {joint: Neck}], params: "
+       "[0, 1, 0], "
+       "frames: [0, 3]}\n  - {kind: follow_path, points: [{joint: LeftHand}, {joint: Hips}], params: [0, 1, "
+       "0, 1, 1, 0], frames: [2, 8]}\n");
 
   seed("target", "bones.yaml",
-       "version: 1\ndefault: 1.0\nbones:\n  \"(Left|Right)(Leg|Foot|ToeBase)\": 0.6\n  \"Spine|Chest|Neck|Head\": 1.3\n");
-  seed("target", "lengths.yaml", "version: 1\ndefault: 0.9\nlengths:\n  \"LeftLeg|RightLeg\": 0.35\n  Head: 0.2\n");
+       "version: 1\ndefault: 1.0\nbones:\n  \"(Left|Right)(Leg|Foot|ToeBase)\": 0.6\n  "
+       "\"Spine|Chest|Neck|Head\": 1.3\n");
+  seed("target", "lengths.yaml",
+       "version: 1\ndefault: 0.9\nlengths:\n  \"LeftLeg|RightLeg\": 0.35\n  Head: 0.2\n");
   seed("target", "morph.yaml",
-       "version: 1\ndefault: 1.0\nmorph:\n  - {time: 0.0, scale: 1.0}\n  - time: 0.5\n    bones: {\"Left.*\": 0.6}\n"
+       "version: 1\ndefault: 1.0\nmorph:\n  - {time: 0.0, scale: 1.0}\n  - time: 0.5\n    bones: "
+       "{\"Left.*\": 0.6}\n"
        "  - time: 0.9\n    default: 0.8\n    lengths: {Head: 0.25}\n");
 
   seed("body", "table.yaml",
-       "version: 1\ntable: de_leva_female\nmass: 62\nclasses:\n  \"Spine|Chest\": trunk\n  \"LeftShoulder\": massless\n"
+       "version: 1\ntable: de_leva_female\nmass: 62\nclasses:\n  \"Spine|Chest\": trunk\n  \"LeftShoulder\": "
+       "massless\n"
        "segments:\n  LeftUpLeg: {mass_scale: 10}\n  \"(Left|Right)Hand\": {mass: 0.5}\n"
        "  Head: {com: [0, 0.1, 0], inertia: [0.02, 0.02, 0.015]}\ntorque_limits:\n  \".*\": 400\n"
        "  \"(Left|Right)Leg\": [250, 250, 250]\nfriction: 0.7\ngravity: [0, -9.81, 0]\n");

@@ -128,7 +128,8 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
       "blender -b --factory-startup --python-exit-code 1 --python '" + script.string() + "' --";
   for (const auto& [name, m] : clips) {
     const fs::path bvh = dir / (name + ".bvh");
-    kg::write_file_atomically(bvh, [&](std::ostream& os) { kg::io::write_bvh(os, m, {.units = "m"}); });
+    kg::write_file_atomically(bvh,
+                              [&clip = m](std::ostream& os) { kg::io::write_bvh(os, clip, {.units = "m"}); });
     command += " '" + bvh.string() + "' '" + (dir / (name + ".tsv")).string() + "'";
   }
   command += " > '" + (dir / "blender.log").string() + "' 2>&1";

@@ -64,8 +64,7 @@ TEST_CASE("io node factories validate their options when the graph loads") {
     const graph::NodeType& t = test::node_type(registry, type);
     graph::Params params = test::params_for(t.spec);
     for (const auto& [name, value] : paths)
-      if (std::any_of(t.spec.params.begin(), t.spec.params.end(),
-                      [&](const graph::ParamSpec& p) { return p.name == name; }))
+      if (std::ranges::find(t.spec.params, name, &graph::ParamSpec::name) != t.spec.params.end())
         params.set(name, value);
     CHECK_NOTHROW(t.create(params));
   }

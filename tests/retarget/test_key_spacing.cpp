@@ -78,7 +78,7 @@ TEST_CASE("signals of known band content pick the expected spacing", "[retarget]
   // Each band L_k (k >= 1) peaks near a period of 3.8 x 2^k frames: a sine there puts most of
   // its energy in that level.
   for (const auto& [period, level] : {std::pair{3.0, 0}, {7.0, 1}, {15.0, 2}, {30.0, 3}, {61.0, 4}}) {
-    const auto m = clip(480, [&](int f) { return sine(f, period); });
+    const auto m = clip(480, [p = period](int f) { return sine(f, p); });
     const auto e = kg::retarget::pyramid_energy(m, {0});
     INFO("period " << period);
     CHECK(std::max_element(e.fraction.begin(), e.fraction.end()) - e.fraction.begin() == level);

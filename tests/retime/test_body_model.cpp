@@ -842,7 +842,7 @@ TEST_CASE("body file and spec: fuzzed patterns refused at their place with a sho
         {"classes", "thigh"}, {"segments", "{mass: 1}"}, {"torque_limits", "100"}};
     for (const auto& [what, value] : keys)
       kg::test::check_refusal(
-          error([&] {
+          error([&, &what = what, &value = value] {  // clang before 16 captures no structured binding
             body::parse_body_yaml("version: 1\n" + what + ":\n" + kg::test::explicit_entry(p.text, value, 2),
                                   "deep.yaml");
           }),

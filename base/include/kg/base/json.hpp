@@ -58,7 +58,7 @@ class JsonWriter {
   // The alternative a variant holds (a ParamValue, a Figure), written as itself.
   template <class... Ts>
   void value(const std::variant<Ts...>& v) {
-    std::visit([this](const auto& x) { value(x); }, v);
+    std::visit([this](const auto& x) { this->value(x); }, v);
   }
   // null when empty.
   template <class T>
