@@ -42,6 +42,8 @@ struct Eval {
 
 Eval eval(const ConstraintKind& kind, const Constraint& c, const std::vector<Eigen::Vector3d>& pts,
           const std::vector<double>& vals) {
+  REQUIRE(pts.size() == c.points.size());  // evaluate reads one value per point and channel
+  REQUIRE(vals.size() == c.channels.size());
   Eval e;
   const int rows = kind.rows(c);
   e.r.setZero(rows);
@@ -115,7 +117,11 @@ TEST_CASE("parameter_range: range rows, equality and one-sided forms") {
   CHECK(k.is_inequality(at_most, 0));
   CHECK(eval(k, at_most, {}, {0.5}).r[0] == Approx(-0.2));
 
-  for (const Constraint& c : {range, lower, eq, at_most}) check_derivatives(k, c, {}, {0.2, 1.5});
+  for (const Constraint& c : {range, lower, eq, at_most}) {
+    std::vector<double> values{0.2, 1.5};
+    values.resize(c.channels.size());
+    check_derivatives(k, c, {}, values);
+  }
 }
 
 TEST_CASE("position and region: masked axes, inequalities, boxes") {
