@@ -111,7 +111,7 @@ class Loader {
                   const std::vector<std::string>& allowed) const {
     for (const Entry& e : es) {
       if (std::find(allowed.begin(), allowed.end(), e.key) != allowed.end()) continue;
-      const std::string dotted = path.empty() ? e.key : path + "." + e.key;
+      const std::string dotted = text::key_path(path, e.key);
       fail("unknown key " + text::in_quotes(dotted) + did_you_mean(e.key, allowed) +
                " (allowed here: " + text::join(allowed) + ")",
            at(e.key_node));
@@ -307,7 +307,7 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
 
   if (const Entry* vs = Loader::find(h.top, "variables")) {
     for (const Entry& e : L.entries(vs->value, "variables")) {
-      const std::string path = "variables." + e.key;
+      const std::string path = text::key_path("variables", e.key);
       if (!is_identifier(e.key, false))
         L.fail("variable name " + text::in_quotes(e.key) +
                    " must be letters, digits and '_', not starting with a digit",
@@ -648,7 +648,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
   std::map<std::string, std::size_t> index;
   ParamPlaces places;
   for (const Entry& e : L.entries(nodes->value, "nodes")) {
-    const std::string path = "nodes." + e.key;
+    const std::string path = text::key_path("nodes", e.key);
     const SourceLocation where = L.at(e.key_node);
     if (!is_identifier(e.key, true))
       L.fail("node id " + text::in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);

@@ -157,14 +157,14 @@ class Reader : public kg::YamlReader {
 
   SegmentOverride segment_override(const Entry& s) const {
     check_pattern(s, "segments");
-    const std::string what = "segments." + s.key;
+    const std::string what = text::key_path("segments", s.key);
     const std::vector<Entry> fields = entries(s.value, what);
     check_keys(fields, what, {"mass", "mass_scale", "com", "inertia", "radius"});
     if (fields.empty())
       fail(what + ": expected at least one of mass, mass_scale, com, inertia, radius", s.value);
     SegmentOverride o{.pattern = s.key, .where = at(s.key_node)};
     for (const Entry& f : fields) {
-      const std::string fw = what + "." + f.key;
+      const std::string fw = text::key_path(what, f.key);
       if (f.key == "mass") o.mass = positive(f.value, fw);
       if (f.key == "mass_scale") o.mass_scale = positive(f.value, fw);
       if (f.key == "radius") o.radius = positive(f.value, fw);

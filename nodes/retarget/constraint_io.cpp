@@ -342,18 +342,18 @@ class Reader : public kg::YamlReader {
         if (!near.empty()) msg += " (nearest: '" + near + "')";
         fail(msg, it->first.Mark());
       }
+      const std::string where = text::key_path("limits", pattern);
       const YAML::Node chans = it->second;
-      if (!chans.IsMap()) fail("limits." + pattern + ": expected {channel: [min, max]}", chans.Mark());
+      if (!chans.IsMap()) fail(where + ": expected {channel: [min, max]}", chans.Mark());
       for (auto ct = chans.begin(); ct != chans.end(); ++ct) {
         const std::string cname = ct->first.Scalar();
         const auto kind = motion::channel_kind_from_string(cname);
         if (!kind)
-          fail("limits." + pattern + ": unknown channel '" + cname + "' (Xposition..Zrotation)",
+          fail(where + ": unknown channel " + text::in_quotes(cname) + " (Xposition..Zrotation)",
                ct->first.Mark());
-        const std::vector<double> range = numbers(ct->second, "limits." + pattern + "." + cname);
+        const std::vector<double> range = numbers(ct->second, text::key_path(where, cname));
         if (range.size() != 2 || std::isnan(range[0]) || std::isnan(range[1]) || range[0] > range[1])
-          fail("limits." + pattern + "." + cname + ": expected [min, max] with min <= max",
-               ct->second.Mark());
+          fail(text::key_path(where, cname) + ": expected [min, max] with min <= max", ct->second.Mark());
         const double scale = motion::is_rotation(*kind) ? std::numbers::pi / 180.0 : 1.0;
         int made = 0;
         for (int j : joints) {
@@ -371,8 +371,7 @@ class Reader : public kg::YamlReader {
             ++made;
           }
         }
-        if (made == 0)
-          fail("limits." + pattern + ": no joint it matches has a " + cname + " channel", ct->first.Mark());
+        if (made == 0) fail(where + ": no joint it matches has a " + cname + " channel", ct->first.Mark());
       }
     }
   }

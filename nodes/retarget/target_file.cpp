@@ -40,7 +40,7 @@ class Reader : public kg::YamlReader {
     for (std::size_t p = 0; p < es.size(); ++p) {
       const Entry& e = es[p];
       const kg::Pattern re = pattern(e.key_node, what);
-      const double v = positive(e.value, what + "." + e.key);
+      const double v = positive(e.value, text::key_path(what, e.key));
       std::vector<std::string> matched, shadowed;
       for (int j = 0; j < n; ++j) {
         const std::string& name = source_.joint(j).name;
@@ -52,7 +52,7 @@ class Reader : public kg::YamlReader {
         if (lengths) {
           const double len = source_.joint(j).offset.norm();
           if (!(len > 0))
-            fail(what + "." + e.key + ": joint " + text::in_quotes(name) +
+            fail(text::key_path(what, e.key) + ": joint " + text::in_quotes(name) +
                      " has a zero offset from its parent in the source, so no length can be set for it",
                  e.key_node);
           f[j] = v / len;
@@ -139,7 +139,7 @@ class Reader : public kg::YamlReader {
       } else {
         const double key_default = kd != nullptr ? positive(kd->value, what + ".default") : fallback;
         const Entry& e = kb != nullptr ? *kb : *kl;
-        f = factors(e.value, kl != nullptr, key_default, what + "." + e.key, out.notes);
+        f = factors(e.value, kl != nullptr, key_default, text::key_path(what, e.key), out.notes);
       }
       times.push_back(t);
       keys.push_back(std::move(f));

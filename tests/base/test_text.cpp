@@ -60,3 +60,14 @@ TEST_CASE("in_quotes escapes and cuts what a file gave", "[text]") {
   CHECK(text::in_quotes(std::string("\xff\xfeH\0I\0", 6)) == "'\\xff\\xfeH\\x00I\\x00'");  // UTF-16 bytes
   CHECK(text::in_quotes(std::string(6144, 'k')) == "'" + std::string(200, 'k') + "'... (6144 bytes)");
 }
+
+TEST_CASE("key_path: plain keys as they are, any other quoted and cut", "[text]") {
+  CHECK(text::key_path("segments", "thigh") == "segments.thigh");
+  CHECK(text::key_path("limits", "l.*(femur|tibia)") == "limits.l.*(femur|tibia)");
+  CHECK(text::key_path("", "bones") == "bones");
+  CHECK(text::key_path("bones", "left thigh") == "bones.'left thigh'");
+  CHECK(text::key_path("bones", "") == "bones.''");
+  CHECK(text::key_path("bones", "a\xff") == "bones.'a\\xff'");
+  CHECK(text::key_path("bones", std::string(4000, 'x')) ==
+        "bones.'" + std::string(60, 'x') + "'... (4000 bytes)");
+}

@@ -92,6 +92,18 @@ inline std::string in_quotes(std::string_view text) {
   return excerpt(text, 200);
 }
 
+// `path.key`, where a key of a file is, for a message ("segments.thigh", "limits.l.*"): a key
+// may be anything, so one that is not a short run of printable ASCII is quoted and cut as
+// excerpt does ("bones.'xxxx...'... (4000 bytes)").
+inline std::string key_path(std::string_view path, std::string_view key) {
+  const bool plain = !key.empty() && key.size() <= 60 &&
+                     std::all_of(key.begin(), key.end(), [](char c) { return c > ' ' && c < 0x7f; });
+  std::string out(path);
+  if (!out.empty()) out += '.';
+  out += plain ? std::string(key) : excerpt(key);
+  return out;
+}
+
 // `items` with `separator` between them ("a, b, c"; "" for none).
 inline std::string join(const std::vector<std::string>& items, std::string_view separator = ", ") {
   std::string out;
