@@ -3,6 +3,9 @@
 
 #include "kg/base/error.hpp"
 
+#include <fcntl.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -19,6 +22,7 @@
 #include <stdexcept>
 #include <string>
 #include <system_error>
+#include <utility>
 
 namespace kg {
 
@@ -93,10 +97,8 @@ WrittenFiles& written() {
 }
 
 // Refuses text in UTF-16 or UTF-32 (by its byte-order mark); drops a UTF-8 byte-order mark.
-void check_encoding(std::string& text, const std::string& path, const std::string& what) {
-  const auto starts = [&](std::string_view mark) {
-    return std::string_view(text).substr(0, mark.size()) == mark;
-  };
+void check_encoding(std::string_view& text, const std::string& path, const std::string& what) {
+  const auto starts = [&](std::string_view mark) { return text.substr(0, mark.size()) == mark; };
   using namespace std::string_view_literals;
   for (const auto& [mark, encoding] :
        {std::pair{"\xff\xfe\0\0"sv, "UTF-32 (little-endian)"},
@@ -107,7 +109,7 @@ void check_encoding(std::string& text, const std::string& path, const std::strin
                       text::excerpt(mark) + "); expected UTF-8 or ASCII: save it as UTF-8",
                   {path, 1, 1});
   }
-  if (starts("\xef\xbb\xbf")) text.erase(0, 3);
+  if (starts("\xef\xbb\xbf")) text.remove_prefix(3);
 }
 
 void remove_quietly(const fs::path& p) {
@@ -117,35 +119,68 @@ void remove_quietly(const fs::path& p) {
 
 }  // namespace
 
-std::string read_input_file(const fs::path& path, const std::string& what) {
+InputText::InputText(InputText&& other) noexcept {
+  *this = std::move(other);
+}
+
+InputText& InputText::operator=(InputText&& other) noexcept {
+  if (this == &other) return *this;
+  if (map_ != nullptr) ::munmap(map_, map_size_);
+  if (other.map_ != nullptr) {
+    text_ = other.text_;
+  } else {  // the view points into other's string: where it starts in that string is kept
+    const std::size_t offset =
+        other.text_.empty() ? 0 : static_cast<std::size_t>(other.text_.data() - other.owned_.data());
+    owned_ = std::move(other.owned_);
+    text_ = std::string_view(owned_).substr(offset, other.text_.size());
+  }
+  map_ = std::exchange(other.map_, nullptr);
+  map_size_ = std::exchange(other.map_size_, 0);
+  other.text_ = {};
+  return *this;
+}
+
+InputText::~InputText() {
+  if (map_ != nullptr) ::munmap(map_, map_size_);
+}
+
+InputText map_input_file(const fs::path& path, const std::string& what) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw Error("no such " + what, {path.string()});
   if (fs::is_directory(path, ec)) throw Error(what + " expected, got a directory", {path.string()});
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
-  // A regular file is read in one call into a string of its size (a stream copy regrows its
-  // buffer and copies the text several times over: for a large clip, longer than parsing it);
-  // whatever the size did not cover (a file still growing, a special file of size 0) follows
-  // through the stream.
-  std::string text;
-  const std::uintmax_t size = fs::is_regular_file(path, ec) ? fs::file_size(path, ec) : 0;
-  if (!ec && size > 0 && size < text.max_size()) {
-    text.resize(static_cast<std::size_t>(size));
-    in.read(text.data(), static_cast<std::streamsize>(size));
-    text.resize(static_cast<std::size_t>(in.gcount()));
+  InputText input;
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
+  struct stat st {};
+  if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
+    void* map =
+        ::mmap(nullptr, static_cast<std::size_t>(st.st_size), PROT_READ, MAP_PRIVATE | MAP_POPULATE, fd, 0);
+    if (map != MAP_FAILED) {
+      input.map_ = map;
+      input.map_size_ = static_cast<std::size_t>(st.st_size);
+      input.text_ = std::string_view(static_cast<const char*>(map), input.map_size_);
+    }
   }
-  if (in.good()) {
-    std::ostringstream rest;
-    rest << in.rdbuf();
-    if (rest.tellp() > 0) text += std::move(rest).str();
+  ::close(fd);
+  if (input.map_ == nullptr) {  // not a regular file, or one that cannot be mapped: read it
+    std::ifstream in(path, std::ios::binary);
+    if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
+    std::ostringstream all;
+    all << in.rdbuf();
+    if (in.bad()) throw Error("cannot read " + what, {path.string()});
+    input.owned_ = std::move(all).str();
+    input.text_ = input.owned_;
   }
-  if (in.bad()) throw Error("cannot read " + what, {path.string()});
-  check_encoding(text, path.string(), what);
+  check_encoding(input.text_, path.string(), what);
   const fs::path canonical = fs::weakly_canonical(path, ec);
   InputFiles& files = input_files();
   const std::lock_guard<std::mutex> lock(files.mutex);
   files.paths.insert(ec ? path : canonical);
-  return text;
+  return input;
+}
+
+std::string read_input_file(const fs::path& path, const std::string& what) {
+  return std::string(map_input_file(path, what).text());
 }
 
 bool is_input_file(const fs::path& path) {

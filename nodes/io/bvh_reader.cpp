@@ -478,7 +478,8 @@ BvhClip parse_bvh(std::string_view text, const std::string& file_name) {
 }
 
 BvhClip read_bvh(const std::filesystem::path& path) {
-  return parse_bvh(kg::read_input_file(path, "BVH file"), path.string());
+  const kg::InputText input = kg::map_input_file(path, "BVH file");
+  return parse_bvh(input.text(), path.string());
 }
 
 ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions& options) {

@@ -2,7 +2,11 @@
 // the registry, the JSON writer and atomic writes.
 #include <catch2/catch.hpp>
 
+#include <sys/stat.h>
+
+#include <fstream>
 #include <sstream>
+#include <thread>
 
 #include "../support/temp_dir.hpp"
 #include "kg/base/atomic_file.hpp"
@@ -427,4 +431,33 @@ TEST_CASE("read_input_file reads whole files and protects them from every later 
                     Catch::Contains("absent.txt: no such clip file"));
   CHECK_THROWS_WITH(read_input_file(dir.path(), "clip file"),
                     Catch::Contains("clip file expected, got a directory"));
+}
+
+TEST_CASE("map_input_file: a regular file mapped, a pipe read, the same text either way") {
+  TempDir dir;
+  const std::string big(1 << 20, 'x');
+  const auto file = dir.write("big.bvh", "\xef\xbb\xbf" + big);
+  InputText mapped = map_input_file(file, "BVH file");
+  CHECK(mapped.text() == big);  // the UTF-8 byte-order mark dropped
+  CHECK(is_input_file(file));
+  InputText moved = std::move(mapped);
+  CHECK(moved.text() == big);
+  CHECK(mapped.text().empty());
+
+  const auto empty = dir.write("empty.bvh", "");
+  CHECK(map_input_file(empty, "BVH file").text().empty());
+
+  // A FIFO is no regular file: read through a stream, the BOM dropped from the string it owns.
+  const auto fifo = dir.path() / "clip.fifo";
+  REQUIRE(::mkfifo(fifo.c_str(), 0600) == 0);
+  std::thread writer([&] { std::ofstream(fifo) << "\xef\xbb\xbfHIERARCHY"; });
+  InputText piped = map_input_file(fifo, "BVH file");
+  writer.join();
+  InputText kept;
+  kept = std::move(piped);  // the view follows the string it points into
+  CHECK(kept.text() == "HIERARCHY");
+  CHECK(read_input_file(file, "BVH file") == big);
+
+  CHECK_THROWS_WITH(map_input_file(dir.write("utf16.bvh", std::string("\xff\xfeH\0", 4)), "BVH file"),
+                    Catch::Contains("utf16.bvh:1:1: BVH file is UTF-16 (little-endian) text"));
 }

@@ -12,6 +12,7 @@
 #include <functional>
 #include <ostream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace kg {
@@ -21,6 +22,31 @@ namespace kg {
 // expected, got a directory", "cannot open <what>"; at file:1:1 for UTF-16 and UTF-32 text (told by
 // its byte-order mark), which every reader here would take for binary.
 std::string read_input_file(const std::filesystem::path& path, const std::string& what);
+
+// The content of an input file as read_input_file reads it (same checks, same messages, from now
+// on refused as an output), without a copy: a regular file is mapped read-only, so a large clip
+// parses straight from the page cache; anything else (a pipe, a special file) is read into memory.
+// Move-only; text() is valid while this object lives. A file truncated by another process while
+// mapped faults on access (SIGBUS): readers of files being rewritten use read_input_file.
+class InputText {
+ public:
+  InputText() = default;
+  InputText(InputText&& other) noexcept;
+  InputText& operator=(InputText&& other) noexcept;
+  InputText(const InputText&) = delete;
+  InputText& operator=(const InputText&) = delete;
+  ~InputText();
+
+  std::string_view text() const { return text_; }
+
+ private:
+  friend InputText map_input_file(const std::filesystem::path& path, const std::string& what);
+  void* map_ = nullptr;  // the mapping, when the file is mapped
+  std::size_t map_size_ = 0;
+  std::string owned_;  // the content, when it is not
+  std::string_view text_;
+};
+InputText map_input_file(const std::filesystem::path& path, const std::string& what);
 
 // Whether `path` names a file read through read_input_file (by any path leading to it).
 bool is_input_file(const std::filesystem::path& path);
