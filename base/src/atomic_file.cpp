@@ -16,9 +16,9 @@
 #include <cstring>
 #include <exception>
 #include <fstream>
+#include <memory>
 #include <mutex>
 #include <set>
-#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -151,6 +151,8 @@ InputText map_input_file(const fs::path& path, const std::string& what) {
   InputText input;
   const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
+  const std::unique_ptr<const int, void (*)(const int*)> close_fd(
+      &fd, [](const int* open_fd) { ::close(*open_fd); });
   struct stat st {};
   if (::fstat(fd, &st) == 0 && S_ISREG(st.st_mode) && st.st_size > 0) {
     void* map =
@@ -161,14 +163,18 @@ InputText map_input_file(const fs::path& path, const std::string& what) {
       input.text_ = std::string_view(static_cast<const char*>(map), input.map_size_);
     }
   }
-  ::close(fd);
   if (input.map_ == nullptr) {  // not a regular file, or one that cannot be mapped: read it
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error("cannot open " + what + ": " + std::strerror(errno), {path.string()});
-    std::ostringstream all;
-    all << in.rdbuf();
-    if (in.bad()) throw Error("cannot read " + what, {path.string()});
-    input.owned_ = std::move(all).str();
+    // From the same descriptor: a FIFO opened again would lose its writer in between.
+    char chunk[1 << 16];
+    for (;;) {
+      const ssize_t got = ::read(fd, chunk, sizeof chunk);
+      if (got == 0) break;
+      if (got < 0) {
+        if (errno == EINTR) continue;
+        throw Error("cannot read " + what + ": " + std::strerror(errno), {path.string()});
+      }
+      input.owned_.append(chunk, static_cast<std::size_t>(got));
+    }
     input.text_ = input.owned_;
   }
   check_encoding(input.text_, path.string(), what);
