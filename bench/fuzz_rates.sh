@@ -1,11 +1,11 @@
 #!/usr/bin/env bash
 # Fuzzing throughput of every harness of tests/fuzz (issue 13: at least 1,000 inputs/s each):
 #   bash bench/fuzz_rates.sh [BUILD_DIR] [SECONDS]
-# BUILD_DIR (default build-asan) is a KG_FUZZ build (scripts/dev.sh test --sanitize makes one):
-# each harness fuzzes for SECONDS (default 60) from its seeds and regressions into a scratch
-# corpus, and its executions, their rate and the corpus it reached are printed from libFuzzer's
-# final statistics. In a build without KG_FUZZ the harnesses replay their seeds and regressions
-# instead, and the replay rate is printed.
+# BUILD_DIR (default build-asan) is a KG_FUZZ build (KG_SANITIZE_TEST=1 bash scripts/dev.sh test
+# makes one): each harness fuzzes for SECONDS (default 60) from its seeds and regressions into a
+# scratch corpus as CTest's fuzz test does (tests/fuzz/fuzz.sh), and its executions, their rate
+# and the corpus it reached are printed from libFuzzer's final statistics. In a build without
+# KG_FUZZ the harnesses replay their seeds and regressions instead, and the replay rate is printed.
 set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 build=$(realpath "${1:-build-asan}")
@@ -19,10 +19,10 @@ for harness in bvh asf amc graph target constraints body contacts; do
   exe=$build/bin/fuzz_$harness
   corpora=("$seeds/$harness")
   [[ -d $here/tests/fuzz/regressions/$harness ]] && corpora+=("$here/tests/fuzz/regressions/$harness")
-  if "$exe" -help=1 2>&1 | grep -q libFuzzer; then
-    mkdir -p "$scratch/$harness"
-    log=$("$exe" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 -print_final_stats=1 \
-          -artifact_prefix="$scratch/$harness-" "$scratch/$harness" "${corpora[@]}" 2>&1) || {
+  help=$("$exe" -help=1 2>&1 || true)  # not piped into grep -q: under pipefail its SIGPIPE reads as "no"
+  if [[ $help == *libFuzzer* ]]; then
+    log=$(bash "$here/tests/fuzz/fuzz.sh" "$exe" "$seconds" "$scratch/$harness-" "$scratch/$harness" \
+          "${corpora[@]}" 2>&1) || {
       echo "$log" | tail -40
       echo "fuzz_$harness: a finding (above)" >&2
       exit 1

@@ -1,5 +1,7 @@
 #include "kg/base/error.hpp"
 
+#include "kg/base/text.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <string_view>
@@ -7,7 +9,7 @@
 namespace kg {
 
 std::string SourceLocation::to_string() const {
-  std::string s = file;
+  std::string s = text::shown_path(file);
   if (line > 0) {
     if (!s.empty()) s += ':';
     s += std::to_string(line);

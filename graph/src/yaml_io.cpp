@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <climits>
 #include <fstream>
 #include <functional>
 #include <optional>
@@ -442,8 +443,19 @@ class ParamReader {
                   where);
         return text;
       }
+      case ParamType::InputPath:
+      case ParamType::OutputPath:
+        // No file has such a name, and every message naming the file would carry it whole; a NUL
+        // would end the name the system opens before the one the reader checked.
+        if (text.size() >= PATH_MAX)
+          L_.fail(who + " expects a path, got " + text::excerpt(text) +
+                      ", longer than the system's longest (" + std::to_string(PATH_MAX - 1) + " bytes)",
+                  where);
+        if (text.find('\0') != std::string::npos)
+          L_.fail(who + " expects a path, got " + shown(text, raw) + ", which holds a NUL byte", where);
+        return text;
       default:
-        return text;  // String, InputPath, OutputPath
+        return text;  // String
     }
   }
 

@@ -102,13 +102,15 @@ std::shared_ptr<const MotionFormat> format_for(const std::string& path, const Mo
       reading ? "readers: " + listing(formats, true) + "; writers: " + listing(formats, false)
               : "writers: " + listing(formats, false) + "; readers: " + listing(formats, true);
   if (found.empty()) {
-    const std::string what = ext.empty() ? std::string("a file without an extension") : "'" + ext + "'";
-    throw std::invalid_argument(path + ": no motion " + role + " claims " + what + "; " + available);
+    const std::string what = ext.empty() ? std::string("a file without an extension") : text::excerpt(ext);
+    throw std::invalid_argument(text::shown_path(path) + ": no motion " + role + " claims " + what + "; " +
+                                available);
   }
   std::string names;
   for (const auto& f : found) names += (names.empty() ? "" : " and ") + f->name;
-  throw std::invalid_argument(path + ": '" + ext + "' is claimed by " + std::to_string(found.size()) +
-                              " motion " + role + "s, " + names + "; " + available);
+  throw std::invalid_argument(text::shown_path(path) + ": " + text::excerpt(ext) + " is claimed by " +
+                              std::to_string(found.size()) + " motion " + role + "s, " + names + "; " +
+                              available);
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace kg::motion {
@@ -105,7 +106,7 @@ PlantPoint find_point(const Skeleton& sk, const std::string& spec, int character
   }
   const int j = sk.find_joint(joint);
   if (j < 0) {
-    std::string msg = who + ": unknown joint '" + joint + "'";
+    std::string msg = who + ": unknown joint " + text::in_quotes(joint);
     const std::string near = nearest_joint_name(sk, joint);
     if (!near.empty()) msg += " (nearest: '" + near + "')";
     throw std::invalid_argument(msg);

@@ -92,7 +92,7 @@ class Reader : public kg::YamlReader {
     const motion::Skeleton& sk = skeleton(character);
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
-    std::string msg = "unknown joint '" + name + "'";
+    std::string msg = "unknown joint " + text::in_quotes(name);
     const std::string near = motion::nearest_joint_name(sk, name);
     if (!near.empty()) msg += " (nearest: '" + near + "')";
     if (chars_.size() > 1) msg += " in character " + std::to_string(character);
@@ -152,7 +152,7 @@ class Reader : public kg::YamlReader {
     const motion::Skeleton& sk = skeleton(ch.character);
     const int j = sk.find_joint(joint_name);
     if (j < 0) {
-      std::string msg = "unknown joint '" + joint_name + "'";
+      std::string msg = "unknown joint " + text::in_quotes(joint_name);
       const std::string near = motion::nearest_joint_name(sk, joint_name);
       if (!near.empty()) msg += " (nearest: '" + near + "')";
       fail(msg, n.Mark());

@@ -8,6 +8,7 @@
 
 #include "kg/base/atomic_file.hpp"
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/base/yaml_reader.hpp"
 #include "kg/motion/frame_time.hpp"
 #include "kg/retime/contacts.hpp"
@@ -66,7 +67,7 @@ class Reader : public kg::YamlReader {
     const motion::Skeleton& sk = *motion_.skeleton;
     const int j = sk.find_joint(name);
     if (j >= 0) return j;
-    std::string msg = what + ": unknown joint '" + name + "'";
+    std::string msg = what + ": unknown joint " + text::in_quotes(name);
     const std::string near = motion::nearest_joint_name(sk, name);
     if (!near.empty()) msg += " (did you mean '" + near + "'?)";
     fail(msg, n.Mark());

@@ -133,6 +133,43 @@ TEST_CASE("hostile graph variables: defaults nesting exponentially are refused a
   CHECK(r.err.size() < 2000);
 }
 
+TEST_CASE("hostile path params: a path longer than the system's, or holding a NUL, is refused at its place",
+          "[graphs][hostile]") {
+  TempDir dir;
+  // Found by fuzz_graph: variables expanding to a 676,000-byte path, under the expansion limit,
+  // which the motion reader's message quoted whole.
+  const fs::path fuzzed = kSource / "tests/fuzz/regressions/graph/path_of_676000_bytes.yaml";
+  Result r = bounded_kinegraph({"validate", fuzzed.string()});
+  INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Contains("path_of_676000_bytes.yaml:10:"));
+  CHECK_THAT(r.err, Contains("... (675840 bytes), longer than the system's longest (4095 bytes)"));
+  CHECK(r.err.size() < 1000);
+
+  // One byte under the limit is a path: refused for what it names (no reader claims it), the
+  // message quoting it cut.
+  const std::string longest(4095, 'x');
+  const fs::path graph =
+      dir.write("long_path.yaml",
+                "version: 1\nnodes:\n  a: {type: io.import_motion, params: {path: " + longest + "}}\n");
+  r = bounded_kinegraph({"validate", graph.string()});
+  INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Contains("long_path.yaml:3:"));
+  CHECK_THAT(r.err, Contains("... (4095 bytes): no motion reader claims a file without an extension"));
+  CHECK(r.err.size() < 1000);
+
+  // "walk.bvh\0.amc": the system would open walk.bvh while the reader was chosen for .amc.
+  const fs::path nul =
+      dir.write("nul_path.yaml",
+                "version: 1\nnodes:\n  a: {type: io.import_motion, params: {path: \"walk.bvh\\0.amc\"}}\n");
+  r = bounded_kinegraph({"validate", nul.string()});
+  INFO(show(r));
+  CHECK(r.code == 3);
+  CHECK_THAT(r.err, Contains("nul_path.yaml:3:"));
+  CHECK_THAT(r.err, Contains("'walk.bvh\\x00.amc', which holds a NUL byte"));
+}
+
 TEST_CASE("hostile clip files: encodings, absurd numbers and frame times at their place",
           "[graphs][hostile]") {
   TempDir dir;

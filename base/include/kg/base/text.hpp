@@ -92,6 +92,18 @@ inline std::string in_quotes(std::string_view text) {
   return excerpt(text, 200);
 }
 
+// A file's path for a message, where it leads (file:line: ...) or names the file: as it is when
+// it is at most 200 bytes of what excerpt keeps unescaped, else quoted and cut as in_quotes does
+// (a path is whatever a graph or a command line gave).
+inline std::string shown_path(std::string_view path) {
+  if (path.size() <= 200) {
+    std::string quoted = excerpt(path, 200);
+    if (quoted.size() == path.size() + 2) return std::string(path);  // nothing escaped, nothing cut
+    return quoted;
+  }
+  return in_quotes(path);
+}
+
 // `path.key`, where a key of a file is, for a message ("segments.thigh", "limits.l.*"): a key
 // may be anything, so one that is not a short run of printable ASCII is quoted and cut as
 // excerpt does ("bones.'xxxx...'... (4000 bytes)").
