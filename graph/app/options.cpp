@@ -9,6 +9,7 @@
 #include <optional>
 
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 
 namespace kg::app {
 namespace {
@@ -78,7 +79,8 @@ void set_path_once(std::filesystem::path& field, const char* option, const std::
 
 void apply_set(Options& o, const std::string& setting) {
   const auto eq = setting.find('=');
-  if (eq == std::string::npos || eq == 0) throw UsageError("--set expects NAME=VALUE, got '" + setting + "'");
+  if (eq == std::string::npos || eq == 0)
+    throw UsageError("--set expects NAME=VALUE, got " + text::in_quotes(setting));
   const std::string key = setting.substr(0, eq);
   if (!o.sets.emplace(key, setting.substr(eq + 1)).second)
     throw UsageError("--set " + key + " is given twice");
@@ -386,7 +388,7 @@ std::string parse_error_message(const CLI::ParseError& e) {
 std::vector<std::string> refuse_unknown_options(const CommandLine& cli) {
   std::vector<std::string> arguments;
   for (const std::string& arg : cli.app.remaining()) {
-    if (arg.size() > 1 && arg[0] == '-') throw UsageError("unknown option '" + arg + "'");
+    if (arg.size() > 1 && arg[0] == '-') throw UsageError("unknown option " + text::in_quotes(arg));
     arguments.push_back(arg);
   }
   return arguments;

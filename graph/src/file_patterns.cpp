@@ -7,6 +7,8 @@
 #include <stdexcept>
 #include <system_error>
 
+#include "kg/base/text.hpp"
+
 namespace kg::graph {
 namespace {
 
@@ -71,10 +73,10 @@ std::vector<fs::path> expand_file_patterns(const std::vector<std::string>& patte
     if (found.empty() && wild && fs::is_regular_file(absolute, ec)) found.insert(absolute);  // take[1].bvh
     if (found.empty()) {
       if (!wild && fs::is_directory(absolute, ec))
-        throw std::invalid_argument("input '" + pattern + "' is a folder (give a pattern such as '" +
-                                    pattern + "/*.bvh')");
-      throw std::invalid_argument(wild ? "input pattern '" + pattern + "' matches no file"
-                                       : "no such input file: '" + pattern + "'");
+        throw std::invalid_argument("input " + text::in_quotes(pattern) +
+                                    " is a folder (give a pattern such as '" + pattern + "/*.bvh')");
+      throw std::invalid_argument(wild ? "input pattern " + text::in_quotes(pattern) + " matches no file"
+                                       : "no such input file: " + text::in_quotes(pattern));
     }
     all.insert(found.begin(), found.end());
   }

@@ -24,6 +24,7 @@
 #include <boost/dll/shared_library.hpp>
 
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/graph/plugin_abi.hpp"
 
 namespace kg::graph {
@@ -298,7 +299,7 @@ fs::path PluginLoader::resolve(const std::string& entry, const fs::path& graph_d
   if (is_path) {
     fs::path candidate = fs::path(entry).is_absolute() ? fs::path(entry) : graph_dir / entry;
     if (fs::exists(candidate, ec)) return normalised(candidate);
-    throw Error("plugin '" + entry + "' not found: no file or directory " +
+    throw Error("plugin " + text::in_quotes(entry) + " not found: no file or directory " +
                 candidate.lexically_normal().string());
   }
   std::vector<std::string> looked;

@@ -160,9 +160,9 @@ std::vector<std::string> Registry::node_type_names() const {
 NodePtr Registry::create_node(const std::string& type, const Params& params) const {
   auto it = nodes_.find(type);
   if (it == nodes_.end()) {
-    std::string message = "unknown node type '" + type + "'";
+    std::string message = "unknown node type " + text::in_quotes(type);
     const std::string near = nearest_name(type, node_type_names());
-    if (!near.empty()) message += "; did you mean '" + near + "'?";
+    if (!near.empty()) message += "; did you mean " + text::in_quotes(near) + "?";
     throw Error(message);
   }
   const NodeType& made_as = it->second.type;

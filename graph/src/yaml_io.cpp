@@ -33,7 +33,7 @@ const std::vector<std::string> kConnectionKeys = {"from", "to"};
 
 std::string did_you_mean(const std::string& name, const std::vector<std::string>& candidates) {
   const std::string near = nearest_name(name, candidates);
-  return near.empty() ? std::string() : "; did you mean '" + near + "'?";
+  return near.empty() ? std::string() : "; did you mean " + text::in_quotes(near) + "?";
 }
 
 bool is_identifier(const std::string& s, bool allow_dash) {
@@ -382,7 +382,8 @@ class ParamReader {
       : L_(L), vars_(vars), node_id_(node_id), spec_(spec) {}
 
   ParamValue read(const ParamSpec& p, const Entry& e) const {
-    const std::string who = "param '" + p.name + "' of node '" + node_id_ + "' (" + spec_.type + ")";
+    const std::string who = "param " + text::in_quotes(p.name) + " of node " + text::in_quotes(node_id_) +
+                            " (" + spec_.type + ")";
     const SourceLocation where = L_.at(e);
     if (e.value.IsNull()) L_.fail(who + " has no value (expected " + expected(p) + ")", where);
     if (e.value.IsMap()) L_.fail(who + " expects " + expected(p) + ", got a map", where);
@@ -682,7 +683,7 @@ Graph build(const std::string& text, const std::string& file_name, const fs::pat
           "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
       const std::string near = nearest_name(type, names);
       if (!near.empty())
-        message += "; did you mean '" + near + "'?";
+        message += "; did you mean " + text::in_quotes(near) + "?";
       else if (names.empty())
         message += " (no node types are registered: were the plugins loaded?)";
       else

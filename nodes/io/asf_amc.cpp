@@ -244,7 +244,7 @@ class AsfParser {
         std::string hint = kg::nearest_name(keyword, kSections);
         lines_.expected(
             "a section keyword (:version, :name, :units, :documentation, :root, :bonedata, :hierarchy)" +
-                (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
+                (hint.empty() ? std::string() : " (did you mean " + text::in_quotes(hint) + "?)"),
             0);
       }
       if (seen_sections_.count(keyword)) {
@@ -465,7 +465,7 @@ class AsfParser {
                                                     "dof", "limits", "bodymass",  "cofmass", "end"};
         std::string hint = kg::nearest_name(key, kKeys);
         lines_.expected("a bone field (id, name, direction, length, axis, dof, limits, end)" +
-                            (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
+                            (hint.empty() ? std::string() : " (did you mean " + text::in_quotes(hint) + "?)"),
                         0);
       }
     }
@@ -575,7 +575,7 @@ class AsfParser {
     std::string hint = kg::nearest_name(name, names);
     lines_.fail(line, column,
                 "expected a bone of :bonedata, got " + show(name) +
-                    (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"));
+                    (hint.empty() ? std::string() : " (did you mean " + text::in_quotes(hint) + "?)"));
   }
 
   int index_of(const std::string& name, int line, int column) {
@@ -841,7 +841,7 @@ motion::Motion parse_amc(std::string_view text, const std::string& path, const A
         for (const AsfBone& b : asf.bones) names.push_back(b.name);
         std::string hint = kg::nearest_name(std::string(name.text), names);
         lines.expected("a bone of " + asf.path + " or a frame number" +
-                           (hint.empty() ? std::string() : " (did you mean '" + hint + "'?)"),
+                           (hint.empty() ? std::string() : " (did you mean " + text::in_quotes(hint) + "?)"),
                        0);
       }
       const int b = it->second;

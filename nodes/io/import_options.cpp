@@ -1,6 +1,7 @@
 #include "kg/io/import_options.hpp"
 #include "kg/base/error.hpp"
 #include "kg/base/option_check.hpp"
+#include "kg/base/text.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -111,7 +112,8 @@ bool lengths_finite(const motion::Skeleton& skeleton, const motion::FrameMatrix&
 double metres_per_unit(const std::string& units) {
   for (const NamedUnit& u : kUnits)
     if (units == u.name) return u.metres;
-  throw std::invalid_argument("unknown units '" + units + "' (expected m, cm, mm, inch or asf)");
+  throw std::invalid_argument("unknown units " + text::in_quotes(units) +
+                              " (expected m, cm, mm, inch or asf)");
 }
 
 std::string unit_name(double metres) {

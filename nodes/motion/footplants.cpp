@@ -108,7 +108,7 @@ PlantPoint find_point(const Skeleton& sk, const std::string& spec, int character
   if (j < 0) {
     std::string msg = who + ": unknown joint " + text::in_quotes(joint);
     const std::string near = nearest_joint_name(sk, joint);
-    if (!near.empty()) msg += " (nearest: '" + near + "')";
+    if (!near.empty()) msg += " (nearest: " + text::in_quotes(near) + ")";
     throw std::invalid_argument(msg);
   }
   PlantPoint p;
@@ -117,7 +117,8 @@ PlantPoint find_point(const Skeleton& sk, const std::string& spec, int character
   p.point.joint = j;
   if (end) {
     if (sk.joint(j).end_sites.empty())
-      throw std::invalid_argument(who + ": joint '" + joint + "' has no End Site ('" + spec + "')");
+      throw std::invalid_argument(who + ": joint " + text::in_quotes(joint) + " has no End Site (" +
+                                  text::in_quotes(spec) + ")");
     p.point.local = sk.joint(j).end_sites.front();
   }
   if (has_offset) p.point.local = offset;
@@ -295,7 +296,7 @@ double parse_floor(const std::string& text) {
     used = 0;
   }
   if (used != text.size() || !std::isfinite(v))
-    throw std::invalid_argument("floor '" + text + "': expected 'auto' or a height in metres");
+    throw std::invalid_argument("floor " + text::in_quotes(text) + ": expected 'auto' or a height in metres");
   return v;
 }
 

@@ -94,7 +94,7 @@ class Reader : public kg::YamlReader {
     if (j >= 0) return j;
     std::string msg = "unknown joint " + text::in_quotes(name);
     const std::string near = motion::nearest_joint_name(sk, name);
-    if (!near.empty()) msg += " (nearest: '" + near + "')";
+    if (!near.empty()) msg += " (nearest: " + text::in_quotes(near) + ")";
     if (chars_.size() > 1) msg += " in character " + std::to_string(character);
     fail(msg, n.Mark());
   }
@@ -135,7 +135,8 @@ class Reader : public kg::YamlReader {
       const std::string text = n.Scalar();
       const auto dot = text.rfind('.');
       if (dot == std::string::npos)
-        fail(path + ": expected 'Joint.Channel' (e.g. LeftLeg.Xrotation), got '" + text + "'", n.Mark());
+        fail(path + ": expected 'Joint.Channel' (e.g. LeftLeg.Xrotation), got " + text::in_quotes(text),
+             n.Mark());
       joint_name = text.substr(0, dot);
       channel_name = text.substr(dot + 1);
     } else if (n.IsMap()) {
@@ -154,7 +155,7 @@ class Reader : public kg::YamlReader {
     if (j < 0) {
       std::string msg = "unknown joint " + text::in_quotes(joint_name);
       const std::string near = motion::nearest_joint_name(sk, joint_name);
-      if (!near.empty()) msg += " (nearest: '" + near + "')";
+      if (!near.empty()) msg += " (nearest: " + text::in_quotes(near) + ")";
       fail(msg, n.Mark());
     }
     const auto kind = motion::channel_kind_from_string(channel_name);
@@ -167,7 +168,8 @@ class Reader : public kg::YamlReader {
         return ch;
       }
     }
-    fail("joint '" + joint_name + "' has no channel '" + channel_name + "' (it has: " + text::join(has) + ")",
+    fail("joint " + text::in_quotes(joint_name) + " has no channel " + text::in_quotes(channel_name) +
+             " (it has: " + text::join(has) + ")",
          n.Mark());
   }
 
@@ -339,7 +341,7 @@ class Reader : public kg::YamlReader {
       if (joints.empty()) {
         std::string msg = "limits: " + text::excerpt(pattern) + " matches no joint";
         const std::string near = kg::nearest_name(pattern, names);
-        if (!near.empty()) msg += " (nearest: '" + near + "')";
+        if (!near.empty()) msg += " (nearest: " + text::in_quotes(near) + ")";
         fail(msg, it->first.Mark());
       }
       const std::string where = text::key_path("limits", pattern);

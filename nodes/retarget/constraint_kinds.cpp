@@ -29,7 +29,7 @@ Relation relation_from_string(const std::string& text) {
   if (text == "equal") return Relation::Equal;
   if (text == "at_least") return Relation::AtLeast;
   if (text == "at_most") return Relation::AtMost;
-  throw std::invalid_argument("relation '" + text + "': expected equal, at_least or at_most");
+  throw std::invalid_argument("relation " + text::in_quotes(text) + ": expected equal, at_least or at_most");
 }
 
 std::string sample_locals_problem(const Constraint& c) {
@@ -465,7 +465,7 @@ namespace {
   std::string msg =
       "constraint '" + c.label + "': unknown kind '" + c.kind + "' (known: " + text::join(known);
   const std::string near = kg::nearest_name(c.kind, known);
-  if (!near.empty()) msg += "; did you mean '" + near + "'?";
+  if (!near.empty()) msg += "; did you mean " + text::in_quotes(near) + "?";
   throw std::invalid_argument(msg + ")");
 }
 }  // namespace

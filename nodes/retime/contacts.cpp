@@ -291,9 +291,9 @@ Contacts detect_contacts(const motion::Motion& m, const FootContactOptions& o) {
   for (const std::string& name : o.feet) {
     const int j = sk.find_joint(name);
     if (j < 0) {
-      std::string msg = "contacts: unknown foot joint '" + name + "'";
+      std::string msg = "contacts: unknown foot joint " + text::in_quotes(name);
       const std::string near = motion::nearest_joint_name(sk, name);
-      if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+      if (!near.empty()) msg += " (did you mean " + text::in_quotes(near) + "?)";
       throw std::invalid_argument(msg);
     }
     feet.push_back(j);

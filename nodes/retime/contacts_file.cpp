@@ -69,7 +69,7 @@ class Reader : public kg::YamlReader {
     if (j >= 0) return j;
     std::string msg = what + ": unknown joint " + text::in_quotes(name);
     const std::string near = motion::nearest_joint_name(sk, name);
-    if (!near.empty()) msg += " (did you mean '" + near + "'?)";
+    if (!near.empty()) msg += " (did you mean " + text::in_quotes(near) + "?)";
     fail(msg, n.Mark());
   }
 

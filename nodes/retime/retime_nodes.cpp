@@ -9,6 +9,7 @@
 #include <stdexcept>
 
 #include "kg/base/json.hpp"
+#include "kg/base/text.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/graph/sink.hpp"
 #include "kg/retime/contacts.hpp"
@@ -61,7 +62,8 @@ class DynamicsNode final : public graph::Node {
     if (!segment_.empty()) {
       joint = clip.skeleton->find_joint(segment_);
       if (joint < 0)
-        throw std::invalid_argument("segment '" + segment_ + "': no such joint in the motion's skeleton");
+        throw std::invalid_argument("segment " + text::in_quotes(segment_) +
+                                    ": no such joint in the motion's skeleton");
       if (body.segments[static_cast<std::size_t>(joint)].mass == 0)
         throw std::invalid_argument("segment '" + segment_ +
                                     "' is massless in the body model: scaling its mass "

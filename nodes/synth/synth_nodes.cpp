@@ -6,6 +6,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "kg/base/text.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/nodes.hpp"
 #include "kg/synth/synthesize.hpp"
@@ -29,7 +30,7 @@ class SynthesizeNode final : public graph::Node {
                p.get<double>("stature"),
                p.get<double>("fps")} {
     if (kind_ != "walk" && kind_ != "jump" && kind_ != "climb")
-      throw std::invalid_argument("kind '" + kind_ + "': expected walk, jump or climb");
+      throw std::invalid_argument("kind " + text::in_quotes(kind_) + ": expected walk, jump or climb");
     // `steps` means foot landings for a walk and rungs climbed for a climb, with their own
     // ranges; the param's declared range is their union, so each is checked here, at load time.
     const synth::Range steps = kind_ == "climb" ? synth::kClimbRungsRange : synth::kStepsRange;
