@@ -4,6 +4,7 @@
 
 #include <iomanip>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "kg/base/atomic_file.hpp"
@@ -73,10 +74,11 @@ void load_plugins(Host& host, const Options& o, const fs::path& prefix) {
 
 namespace {
 
-void load_graph_plugins(Host& host, const fs::path& file, const std::map<std::string, std::string>& sets) {
+void load_graph_plugins(Host& host, const graph::GraphDocument& document, const fs::path& file,
+                        const std::map<std::string, std::string>& sets) {
   std::vector<graph::PluginEntry> entries;
   try {
-    entries = graph::read_graph_plugins(file, sets);
+    entries = document.plugins(sets);
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   }
@@ -101,9 +103,16 @@ graph::Graph load_graph(Host& host, const fs::path& file, const std::map<std::st
   if (!fs::is_regular_file(file, ec)) {
     throw Failure{kExitGraphInvalid, file.string() + ": no such graph file"};
   }
-  load_graph_plugins(host, file, sets);
+  // One parse for the plugins and the graph; the plugins first, as they provide node types.
+  std::optional<graph::GraphDocument> document;
   try {
-    return graph::load_graph(file, host.registry, sets);
+    document = graph::GraphDocument::from_file(file);
+  } catch (const std::exception& e) {
+    throw Failure{kExitGraphInvalid, e.what()};
+  }
+  load_graph_plugins(host, *document, file, sets);
+  try {
+    return document->load(host.registry, sets);
   } catch (const kg::Error& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   } catch (const std::exception& e) {

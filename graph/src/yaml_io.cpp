@@ -283,10 +283,10 @@ std::optional<bool> parse_bool(std::string text) {
   return std::nullopt;
 }
 
-// Version, doc and the variables declared, none resolved yet.
-Head read_declarations(const Loader& L, Variables& vars, const std::string& text) {
+// Version, doc and the variables declared, none resolved yet. `root` is L.parse's document.
+Head read_declarations(const Loader& L, Variables& vars, const YAML::Node& root) {
   Head h;
-  h.root = L.parse(text);
+  h.root = root;
   h.top = L.entries(h.root, "");
 
   // The version first: a file of another version may well have other keys.
@@ -352,9 +352,9 @@ Head read_declarations(const Loader& L, Variables& vars, const std::string& text
   return h;
 }
 
-Head read_head(const Loader& L, Variables& vars, const std::string& text,
+Head read_head(const Loader& L, Variables& vars, const YAML::Node& root,
                const std::map<std::string, std::string>& overrides) {
-  Head h = read_declarations(L, vars, text);
+  Head h = read_declarations(L, vars, root);
   vars.resolve(overrides);
 
   if (const Entry* ps = Loader::find(h.top, "plugins")) {
@@ -640,11 +640,11 @@ std::vector<std::size_t> find_cycle(std::size_t n, const std::vector<Connection>
   return cycle;
 }
 
-Graph build(const std::string& text, const std::string& file_name, const fs::path& file,
+Graph build(const YAML::Node& root, const std::string& file_name, const fs::path& file,
             const Registry& registry, const std::map<std::string, std::string>& overrides) {
   Loader L(file_name);
   Variables vars(L);
-  Head head = read_head(L, vars, text, overrides);
+  Head head = read_head(L, vars, root, overrides);
 
   Graph g;
   g.file = file;
@@ -848,34 +848,64 @@ std::string read_text(const fs::path& file) {
 
 }  // namespace
 
+struct GraphDocument::Parsed {
+  std::string file_name;
+  fs::path file;
+  YAML::Node root;
+};
+
+GraphDocument::GraphDocument(std::shared_ptr<const Parsed> parsed) : parsed_(std::move(parsed)) {}
+
+GraphDocument GraphDocument::from_file(const fs::path& file) {
+  return GraphDocument(std::make_shared<const Parsed>(
+      Parsed{file.string(), file, Loader(file.string()).parse(read_text(file))}));
+}
+
+GraphDocument GraphDocument::from_string(const std::string& text, const std::string& file_name) {
+  return GraphDocument(
+      std::make_shared<const Parsed>(Parsed{file_name, fs::path(file_name), Loader(file_name).parse(text)}));
+}
+
+std::vector<Variable> GraphDocument::variables() const {
+  Loader L(parsed_->file_name);
+  Variables vars(L);
+  read_declarations(L, vars, parsed_->root);
+  return vars.declared();
+}
+
+std::vector<PluginEntry> GraphDocument::plugins(const std::map<std::string, std::string>& overrides) const {
+  Loader L(parsed_->file_name);
+  Variables vars(L);
+  return read_head(L, vars, parsed_->root, overrides).plugins;
+}
+
+Graph GraphDocument::load(const Registry& registry,
+                          const std::map<std::string, std::string>& overrides) const {
+  return build(parsed_->root, parsed_->file_name, parsed_->file, registry, overrides);
+}
+
 std::vector<PluginEntry> read_graph_plugins(const fs::path& file,
                                             const std::map<std::string, std::string>& overrides) {
-  const std::string text = read_text(file);
-  Loader L(file.string());
-  Variables vars(L);
-  return read_head(L, vars, text, overrides).plugins;
+  return GraphDocument::from_file(file).plugins(overrides);
 }
 
 std::vector<Variable> read_graph_variables(const fs::path& file) {
-  return read_graph_variables_from_string(read_text(file), file.string());
+  return GraphDocument::from_file(file).variables();
 }
 
 std::vector<Variable> read_graph_variables_from_string(const std::string& text,
                                                        const std::string& file_name) {
-  Loader L(file_name);
-  Variables vars(L);
-  read_declarations(L, vars, text);
-  return vars.declared();
+  return GraphDocument::from_string(text, file_name).variables();
 }
 
 Graph load_graph(const fs::path& file, const Registry& registry,
                  const std::map<std::string, std::string>& overrides) {
-  return build(read_text(file), file.string(), file, registry, overrides);
+  return GraphDocument::from_file(file).load(registry, overrides);
 }
 
 Graph load_graph_from_string(const std::string& text, const std::string& file_name, const Registry& registry,
                              const std::map<std::string, std::string>& overrides) {
-  return build(text, file_name, fs::path(file_name), registry, overrides);
+  return GraphDocument::from_string(text, file_name).load(registry, overrides);
 }
 
 }  // namespace kg::graph

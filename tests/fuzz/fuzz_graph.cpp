@@ -45,10 +45,11 @@ void check_graph(const kg::graph::Graph& g) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const std::string text(kg::fuzz::text(data, size));
   kg::fuzz::expect_clean("fuzz.yaml", [&] {
+    const auto document = kg::graph::GraphDocument::from_string(text, "fuzz.yaml");
     std::map<std::string, std::string> overrides;
-    for (const kg::graph::Variable& v : kg::graph::read_graph_variables_from_string(text, "fuzz.yaml"))
+    for (const kg::graph::Variable& v : document.variables())
       if (v.required) overrides[v.name] = "fuzz_" + v.name + ".bvh";
-    check_graph(kg::graph::load_graph_from_string(text, "fuzz.yaml", registry(), overrides));
+    check_graph(document.load(registry(), overrides));
   });
   return 0;
 }

@@ -22,7 +22,9 @@
 
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <string>
+#include <vector>
 
 #include "kg/graph/graph.hpp"
 #include "kg/graph/registry.hpp"
@@ -38,6 +40,27 @@ inline constexpr std::size_t kMaxExpandedBytes = 1 << 20;
 struct PluginEntry {
   std::string entry;
   SourceLocation where;
+};
+
+// A graph file read and parsed once (YAML, strictly: no duplicate key, bounded alias growth), for
+// callers that need its plugins or variables before the graph: the CLI loads the plugins that
+// provide its node types, and batch and tests/fuzz/fuzz_graph.cpp give values to its variables.
+// Cheap to copy (the parsed document is shared, never changed). Throws Error as load_graph does.
+class GraphDocument {
+ public:
+  static GraphDocument from_file(const std::filesystem::path& file);
+  // `file_name` names the text in messages and is the graph's file.
+  static GraphDocument from_string(const std::string& text, const std::string& file_name);
+
+  // As read_graph_variables, read_graph_plugins and load_graph below, without parsing again.
+  std::vector<Variable> variables() const;
+  std::vector<PluginEntry> plugins(const std::map<std::string, std::string>& overrides) const;
+  Graph load(const Registry& registry, const std::map<std::string, std::string>& overrides = {}) const;
+
+ private:
+  struct Parsed;
+  explicit GraphDocument(std::shared_ptr<const Parsed> parsed);
+  std::shared_ptr<const Parsed> parsed_;
 };
 
 // Reads the `plugins:` entries of a graph file (after substituting variables) without needing
