@@ -45,6 +45,13 @@ class DocumentCheck {
     auto& seen = seen_[n.Mark().pos];
     for (const auto& [node, count] : seen)
       if (node.is(n)) return count;
+    // An alias inside the collection it names (`a: &a {b: *a}`) makes yaml-cpp build a cycle:
+    // every reader walking it would recurse without end.
+    for (const auto& open : open_)
+      if (open.is(n))
+        throw Error("an alias " + where() + " names a collection that contains it (a cycle no reader can walk)",
+                    located(path_, n.Mark()));
+    open_.push_back(n);
     ++distinct_;
     long long count = 1;
     if (n.IsMap()) {
@@ -72,6 +79,7 @@ class DocumentCheck {
         path_keys_.pop_back();
       }
     }
+    open_.pop_back();
     seen_[n.Mark().pos].push_back({n, count});
     return count;
   }
@@ -94,6 +102,7 @@ class DocumentCheck {
   long long distinct_ = 0;
   std::unordered_map<int, std::vector<std::pair<YAML::Node, long long>>> seen_;
   std::vector<std::pair<std::string, long long>> path_keys_;  // key, or index of a list item
+  std::vector<YAML::Node> open_;  // the collections being walked, outermost first
 };
 
 std::string shown(double v) {

@@ -133,6 +133,19 @@ TEST_CASE("hostile graph variables: defaults nesting exponentially are refused a
   CHECK(r.err.size() < 2000);
 }
 
+TEST_CASE("hostile graph: an alias inside the map it names is refused at its anchor, not a stack overflow",
+          "[graphs][hostile]") {
+  // Found by fuzz_graph: yaml-cpp builds `params: &p {factor: *p}` as a map containing itself.
+  const fs::path file = kSource / "tests/fuzz/regressions/graph/alias_inside_its_own_map.yaml";
+  for (const char* verb : {"validate", "run"}) {
+    const Result r = bounded_kinegraph({verb, file.string()});
+    INFO(show(r));
+    CHECK(r.code == 3);
+    CHECK_THAT(r.err, Contains("alias_inside_its_own_map.yaml:5:13: an alias in 'nodes.scale.params.factor' "
+                               "names a collection that contains it"));
+  }
+}
+
 TEST_CASE("hostile path params: a path longer than the system's, or holding a NUL, is refused at its place",
           "[graphs][hostile]") {
   TempDir dir;
