@@ -199,8 +199,7 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
     }
     out.warp = out.solve.warp;
     message << (out.solve.converged ? "converged" : "did not converge") << " in " << out.solve.iterations
-            << " iterations" << starts << ", " << fixed(out.solve.seconds * 1000, 1) << " ms ("
-            << out.solve.message << "). ";
+            << " iterations" << starts << " (" << out.solve.message << "). ";
   }
 
   // Parts of the objective and the share of output frames inside their hulls.

@@ -350,7 +350,9 @@ class RetimeNode final : public graph::Node {
       reference = original_torques(ctx.input<Hulls>("reference_hulls"), rt.frames);
     }
     const ClipRetime r = retime_clip(hulls, torques.frames, motion.fps, options, *motion.skeleton, reference);
-    ctx.log(r.message);
+    // The solve time is logged, not put in the message: the message goes into the written report,
+    // which --reproducible keeps the same on every run.
+    ctx.log(r.message + " Solved in " + text::significant(r.solve.seconds * 1000, 3) + " ms.");
     ctx.report("duration", r.warp.duration);
     ctx.report("source_duration", motion.duration());
     ctx.report("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
