@@ -16,7 +16,9 @@
 #include <stdexcept>
 
 #include "kg/base/error.hpp"
+#include "kg/base/text.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/motion/frame_time.hpp"
 
 #include "kg/base/atomic_file.hpp"
 
@@ -354,6 +356,7 @@ void Parser::parse_motion(BvhClip& clip) {
   if (!(clip.frame_time >= kBvhMinFrameTime && clip.frame_time <= kBvhMaxFrameTime))
     fail(time_token, "a frame time of 1e-06..3600 seconds (1e6 to 1/3600 frames per second)",
          shown(time_token.text));
+  clip.motion.fps = motion::rate_of_printed_frame_time(time_token.text, clip.frame_time);
   Token extra = next_on_line();
   if (!extra.text.empty()) fail(extra, "end of line after the frame time");
 
@@ -465,7 +468,6 @@ BvhClip Parser::parse() {
   }
   BvhClip clip;
   parse_motion(clip);
-  clip.motion.fps = 1.0 / clip.frame_time;
   clip.motion.name = std::filesystem::path(file_).stem().string();
   clip.motion.skeleton = std::make_shared<const motion::Skeleton>(std::move(skeleton_));
   return clip;
@@ -486,7 +488,14 @@ ImportedMotion import_bvh(const std::filesystem::path& path, const ImportOptions
   BvhClip clip = read_bvh(path);
   ImportedMotion out;
   out.file_frame_time = clip.frame_time;
-  out.notes = apply_import_options(clip.motion, options, 1.0 / clip.frame_time, path.string());
+  const double file_fps = clip.motion.fps;
+  out.notes = apply_import_options(clip.motion, options, file_fps, path.string());
+  if (options.fps == 0 && file_fps != 1.0 / clip.frame_time)
+    out.notes.insert(out.notes.begin(),
+                     path.string() + ": fps " + text::significant(file_fps, 12) + ": Frame Time " +
+                         text::significant(clip.frame_time, 12) + " s is 1/" +
+                         text::significant(file_fps, 12) + " s to its printed digits (1/Frame Time = " +
+                         text::significant(1.0 / clip.frame_time, 9) + "); set fps to override");
   out.motion = std::move(clip.motion);
   return out;
 }

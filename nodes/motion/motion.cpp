@@ -3,6 +3,7 @@
 
 #include "kg/base/text.hpp"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -54,6 +55,56 @@ int seconds_to_frame(double seconds, double fps, int frame_count) {
                             text::significant(fps) + " fps)");
   }
   return static_cast<int>(std::lround(f));
+}
+
+namespace {
+
+// The place value of the last digit of a decimal number as written ("0.0333333": 1e-7,
+// "8.333e-3": 1e-6, "30": 1); 0 when `printed` is not such a number.
+double last_digit_place(std::string_view printed) {
+  std::size_t i = 0;
+  if (i < printed.size() && (printed[i] == '+' || printed[i] == '-')) ++i;
+  int digits = 0, after_point = 0;
+  bool point = false;
+  for (; i < printed.size(); ++i) {
+    const char c = printed[i];
+    if (c >= '0' && c <= '9') {
+      ++digits, after_point += point;
+    } else if (c == '.' && !point) {
+      point = true;
+    } else {
+      break;
+    }
+  }
+  int exponent = 0;
+  if (i < printed.size() && (printed[i] == 'e' || printed[i] == 'E')) {
+    ++i;
+    if (i < printed.size() && printed[i] == '+') ++i;
+    const auto [end, ec] = std::from_chars(printed.data() + i, printed.data() + printed.size(), exponent);
+    if (ec != std::errc() || end != printed.data() + printed.size()) return 0;
+  } else if (i != printed.size()) {
+    return 0;
+  }
+  if (digits == 0 || exponent < -300 || exponent > 300) return 0;
+  return std::pow(10.0, exponent - after_point);
+}
+
+}  // namespace
+
+double rate_of_printed_frame_time(std::string_view printed, double seconds) {
+  const double raw = 1.0 / seconds;
+  const double half_place = 0.5 * last_digit_place(printed);
+  if (!(seconds > 0) || !std::isfinite(raw) || half_place == 0) return raw;
+  const bool digits_fix_rate = half_place <= 1e-4 * seconds;
+  for (const double per_rate : {1.0, 1.001}) {  // n / per_rate: integer and NTSC rates
+    const double n = std::round(raw * per_rate);
+    if (n < 1) continue;
+    const double rate = n / per_rate;
+    const double off = std::abs(1.0 / rate - seconds);
+    // The 1e-12 admits a rate the value already is, but for its binary rounding ("0.04").
+    if ((digits_fix_rate && off <= half_place * (1 + 1e-9)) || off <= 1e-12 * seconds) return rate;
+  }
+  return raw;
 }
 
 }  // namespace kg::motion

@@ -12,6 +12,7 @@
 
 #include "../support/temp_dir.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/motion/frame_time.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
 
@@ -61,7 +62,12 @@ void check_same_to_precision(std::string_view source, std::string_view written, 
   int mismatches = 0;
   for (std::size_t i = 0; i < a.size(); ++i) {
     double x = 0, y = 0;
-    if (as_number(a[i], x) && as_number(b[i], y)) {
+    if (i > 0 && a[i - 1] == "Time:" && as_number(a[i], x) && as_number(b[i], y)) {
+      // The frame time is written as 1 / fps to 9 digits, fps being the rate the source's
+      // printed digits stand for (0.033333 is 1/30 s): the same rate, not the same text.
+      if (std::abs(1 / y - kg::motion::rate_of_printed_frame_time(a[i], x)) > 1e-7 / y)
+        if (++mismatches < 5) FAIL_CHECK("frame time: source " << a[i] << ", written " << b[i]);
+    } else if (as_number(a[i], x) && as_number(b[i], y)) {
       if (std::abs(x - y) > half + 8 * std::abs(x) * 2.2e-16) {
         if (++mismatches < 5) FAIL_CHECK("word " << i << ": source " << a[i] << ", written " << b[i]);
       }
@@ -92,8 +98,9 @@ TEST_CASE("bvh writer: numbers, frame time and layout") {
   const std::string out = write_bvh_string(clip.motion, {.precision = 6});
   CHECK(out ==
         "HIERARCHY\nROOT hip\n{\n\tOFFSET 0 0 1.5\n\tCHANNELS 4 Xposition Zrotation Yrotation Xrotation\n"
-        "\tEnd Site\n\t{\n\t\tOFFSET 0 10 0\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.00833333\n"
-        "0 90 -45.25 0\n2 0.5 0 12.345679\n");
+        "\tEnd Site\n\t{\n\t\tOFFSET 0 10 0\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.00833333333\n"
+        "0 90 -45.25 0\n2 0.5 0 12.345679\n");  // 0.00833333 is 1/120 s to its digits
+  CHECK(clip.motion.fps == 120);
   kg::motion::Motion m = clip.motion;
   m.fps = 120;
   CHECK(write_bvh_string(m).find("Frame Time: 0.00833333333\n") != std::string::npos);

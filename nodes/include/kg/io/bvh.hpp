@@ -29,7 +29,8 @@ namespace kg::io {
 struct BvhClip {
   // Lengths (OFFSETs, End Sites, position channel values) in file units, file axes
   // (skeleton->source_unit_metres == 1, file_to_world == identity); rotation channels in
-  // radians; fps = 1 / frame_time; name = the file's stem. Joints in file order (depth first),
+  // radians; fps = motion::rate_of_printed_frame_time of the header (frame_time.hpp: 30, not
+  // 30.00003, for "0.0333333"); name = the file's stem. Joints in file order (depth first),
   // so channel i of a frame is the i-th value of its line.
   motion::Motion motion;
   double frame_time = 0;  // seconds per frame, as the header's "Frame Time:" says
