@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "kg/base/error.hpp"
 #include "kg/base/text.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
@@ -33,6 +34,9 @@ ImportedMotion read_amc_file(const std::string& path, const std::string& skeleto
   std::string asf = skeleton_path;
   std::vector<std::string> notes;
   if (asf.empty()) {
+    // A missing .amc is what is wrong, not the skeleton that cannot be guessed beside it.
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw kg::Error("no such AMC file", {path});
     asf = guess_asf_for_amc(path);
     if (asf.empty()) {
       throw std::invalid_argument(

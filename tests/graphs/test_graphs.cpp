@@ -3,6 +3,7 @@
 // output must read back to the same frames and joint world positions as its source.
 #include <algorithm>
 #include <filesystem>
+#include <map>
 #include <regex>
 #include <string>
 #include <vector>
@@ -19,6 +20,7 @@
 namespace {
 
 namespace fs = std::filesystem;
+using kg::test::read_file;
 using kg::test::Result;
 using kg::test::show;
 using kg::test::TempDir;
@@ -100,6 +102,33 @@ TEST_CASE("graphs/demo.yaml runs on synthesized motion and writes readable clips
   const YAML::Node metrics = YAML::LoadFile((out / "walk_small_metrics.json").string());
   CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
   CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
+}
+
+TEST_CASE("run --reproducible twice writes the same bytes: every file graphs/demo.yaml writes", "[graphs]") {
+  // The retime report's message carried the solve time in ms, so two runs differed (issue 14).
+  TempDir dir;
+  std::map<std::string, std::string> first;
+  for (const std::string run : {"a", "b"}) {
+    const fs::path out = dir / run;
+    const Result r = kinegraph({"run", (kSource / "graphs/demo.yaml").string(), "--set",
+                                "out=" + out.string(), "--jobs", "2", "--reproducible"});
+    INFO(show(r));
+    REQUIRE(r.code == 0);
+    int files = 0;
+    for (const auto& entry : fs::directory_iterator(out)) {
+      const std::string name = entry.path().filename().string(), bytes = read_file(entry.path());
+      ++files;
+      INFO(name);
+      if (run == "a") {
+        first[name] = bytes;
+      } else {
+        REQUIRE(first.count(name) == 1);
+        CHECK(bytes == first[name]);
+      }
+    }
+    CHECK(files == static_cast<int>(first.size()));
+    CHECK(files >= 8);
+  }
 }
 
 TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legged and a morphing character",
@@ -348,6 +377,32 @@ TEST_CASE("graphs/convert.yaml resamples and overrides fps and units", "[graphs]
   CHECK(converted.frame_count() == kg::motion::resampled_frame_count(source.frame_count(), 120, 30));
 }
 
+TEST_CASE("graphs/convert.yaml resampling a clip to its own rate keeps every frame", "[graphs]") {
+  // A header's "Frame Time: 0.0333333" is 30 fps to its digits, not 30.00003: resampled to 30 the
+  // clip kept 299 of 300 frames (issue 14). Its frames are those of the source, bit for bit.
+  TempDir dir;
+  std::string clip = kg::test::read_file(kSource / "tests/graphs/data/two_joints.bvh");
+  const std::size_t frames_at = clip.find("Frames: 3");
+  REQUIRE(frames_at != std::string::npos);
+  std::string lines;
+  for (int f = 0; f < 300; ++f)
+    lines += std::to_string(0.01 * f) + " 90 0 0 0 0 0 " + std::to_string(f % 90) + " 0\n";
+  clip = clip.substr(0, frames_at) + "Frames: 300\nFrame Time: 0.0333333\n" + lines;
+  const fs::path input = dir.write("clip.bvh", clip), output = dir / "out.bvh";
+  const Result r =
+      kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + input.string(),
+                 "--set", "output=" + output.string(), "--set", "resample=30"});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  CHECK(r.err.find("Frame Time 0.0333333 s is 1/30 s to its printed digits") != std::string::npos);
+  const auto source = kg::io::read_bvh(input).motion;
+  const auto converted = kg::io::read_bvh(output).motion;
+  CHECK(source.fps == 30);
+  CHECK(converted.fps == 30);
+  REQUIRE(converted.frame_count() == 300);
+  CHECK(worst_joint_distance(source, converted) < 1e-6);
+}
+
 TEST_CASE("graphs/convert.yaml never overwrites its input and refuses a malformed clip", "[graphs]") {
   // The input is never overwritten: an output path equal to the input is refused before running.
   TempDir work;
@@ -367,6 +422,17 @@ TEST_CASE("graphs/convert.yaml never overwrites its input and refuses a malforme
   INFO(show(broken));
   CHECK(broken.code == 1);
   CHECK_THAT(broken.err, Catch::Contains("broken.bvh:4"));
+  CHECK_FALSE(fs::exists(work / "never.bvh"));
+
+  // A missing .amc in a missing folder is a missing .amc, not a skeleton that cannot be guessed.
+  const fs::path missing = work / "no_such_folder/16_15.amc";
+  const Result absent =
+      kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + missing.string(),
+                 "--set", "output=" + (work / "never.bvh").string()});
+  INFO(show(absent));
+  CHECK(absent.code == 1);
+  CHECK_THAT(absent.err, Catch::Contains(missing.string() + ": no such AMC file"));
+  CHECK_THAT(absent.err, !Catch::Contains("skeleton"));
   CHECK_FALSE(fs::exists(work / "never.bvh"));
 }
 
