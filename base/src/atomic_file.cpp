@@ -274,6 +274,18 @@ void remove_pending_temporaries() noexcept {
   unlink_tracked(pending_slots);
 }
 
+void forget_files_of_parent_process() {
+  {
+    WrittenFiles& files = written();
+    const std::lock_guard<std::mutex> lock(files.mutex);
+    files.paths.clear();
+    for (PendingSlot& slot : written_slots) slot.state.store(0);
+  }
+  InputFiles& files = input_files();
+  const std::lock_guard<std::mutex> lock(files.mutex);
+  files.paths.clear();
+}
+
 std::vector<fs::path> written_files() {
   WrittenFiles& files = written();
   const std::lock_guard<std::mutex> lock(files.mutex);

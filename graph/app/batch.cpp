@@ -177,6 +177,41 @@ std::vector<graph::ManifestRecord> read_manifests(const fs::path& dir) {
   return records;
 }
 
+// The shards DIR's manifests name (manifest.shard-K-of-N.jsonl) that wrote none: "1/3" for a
+// shard 1 of 3 whose siblings ran but which did not.
+std::vector<std::string> shards_without_manifest(const fs::path& dir) {
+  std::map<int, std::set<int>> ran;  // count -> indices with a manifest
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    int index = -1, count = 0, used = 0;
+    const std::string name = it->path().filename().string();
+    if (std::sscanf(name.c_str(), "manifest.shard-%d-of-%d.jsonl%n", &index, &count, &used) == 2 &&
+        used == static_cast<int>(name.size()) && index >= 0 && index < count)
+      ran[count].insert(index);
+  }
+  std::vector<std::string> missing;
+  for (const auto& [count, indices] : ran)
+    for (int k = 0; k < count; ++k)
+      if (!indices.count(k)) missing.push_back(std::to_string(k) + "/" + std::to_string(count));
+  return missing;
+}
+
+// A shard writes every input of its batch to DIR/inputs.txt (as --slurm does), so that merge can
+// name the inputs no shard recorded; shards given other inputs than that list are refused.
+void record_batch_inputs(const fs::path& list, const std::vector<Item>& all) {
+  std::string text;
+  for (const Item& item : all) text += item.input.string() + '\n';
+  std::error_code ec;
+  if (fs::exists(list, ec)) {
+    if (kg::read_input_file(list, "input list") == text) return;
+    throw Failure{kExitUsage, list.string() +
+                                  " lists other inputs than this shard was given: every shard of a batch "
+                                  "takes the same inputs (use another --out, or remove that file to start "
+                                  "the batch anew)"};
+  }
+  kg::write_file_atomically(list, [&](std::ostream& os) { os << text; });
+}
+
 std::string relative_to(const fs::path& path, const fs::path& dir) {
   const fs::path relative = path.lexically_relative(dir);
   if (!relative.empty() && *relative.begin() != "..") return relative.generic_string();
@@ -587,6 +622,7 @@ class Workers {
       ::close(g_signal_pipe[1]);
       if (manifest_fd_ >= 0) ::close(manifest_fd_);
       for (const Running& other : running_) ::close(other.fd);
+      kg::forget_files_of_parent_process();  // the shard's inputs.txt is no item's output
       run_item(host_, b_, item, fds[1]);
     }
     ::sigprocmask(SIG_SETMASK, &unblocked, nullptr);
@@ -878,6 +914,7 @@ int batch(Host& host, const Options& o, const char* argv0) {
   if (ec) throw Failure{kExitUsage, "--out " + o.out.string() + ": cannot create it: " + ec.message()};
   const fs::path manifest = manifest_path(b.dir, o.shard);
   const ManifestLock lock(manifest, b.host_name);
+  if (o.shard) record_batch_inputs(b.dir / "inputs.txt", all);
 
   std::vector<graph::ManifestRecord> records = read_manifests(b.dir);
   const std::vector<graph::ManifestRecord> latest = graph::latest_records(records);
@@ -991,11 +1028,13 @@ int merge(const Options& o) {
   std::vector<std::string> missing;
   for (const Item& item : expected)
     if (!recorded.count(item.input.string())) missing.push_back(item.input.string());
+  const std::vector<std::string> silent_shards = shards_without_manifest(dir);
   std::cout << "kinegraph: merge: " << latest.size() << " item(s) in " << manifest.string() << ": " << ok
             << " ok, " << failed.size() << " failed";
   if (identity) std::cout << ", " << stale.size() << " stale";
   if (!expected.empty())
     std::cout << ", " << missing.size() << " of " << expected.size() << " inputs without a record";
+  if (!silent_shards.empty()) std::cout << ", " << silent_shards.size() << " shard(s) wrote no manifest";
   std::cout << '\n';
   for (const graph::ManifestRecord* r : failed)
     std::cerr << "  failed: " << r->input << ": " << r->message << " (log: " << (dir / r->log).string()
@@ -1004,7 +1043,11 @@ int merge(const Options& o) {
     std::cerr << "  stale (another graph or settings than " << dir.string() << "/batch.json): " << r->input
               << '\n';
   for (const std::string& input : missing) std::cerr << "  no record: " << input << '\n';
-  return failed.empty() && missing.empty() && stale.empty() ? kExitOk : kExitNodeFailed;
+  for (const std::string& shard : silent_shards)
+    std::cerr << "  no manifest from shard " << shard << " (run it: kinegraph batch ... --shard " << shard
+              << ")\n";
+  return failed.empty() && missing.empty() && stale.empty() && silent_shards.empty() ? kExitOk
+                                                                                     : kExitNodeFailed;
 }
 
 }  // namespace kg::app

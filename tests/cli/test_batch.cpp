@@ -405,6 +405,34 @@ TEST_CASE("shards split the items deterministically and merge recovers the whole
   CHECK_THAT(whole.out, Contains("5 already done"));
 }
 
+TEST_CASE("merge names the shards that wrote nothing and the inputs no shard recorded", "[batch]") {
+  // Issue 14: after shards 0/3 and 1/3 merge said "0 failed" and exited 0 while two inputs never ran.
+  Setup s;
+  for (int i = 0; i < 8; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
+  for (const char* shard : {"0/3", "1/3"}) REQUIRE(s.batch({"--shard", shard}).code == 0);
+  const Result merged = kinegraph({"merge", s.out.string()});
+  INFO(show(merged));
+  CHECK(merged.code == 1);
+  CHECK_THAT(merged.out,
+             Contains("6 ok, 0 failed, 2 of 8 inputs without a record, 1 shard(s) wrote no manifest"));
+  CHECK_THAT(merged.err, Contains("no record: " + (s.dir / "in" / "n2.txt").string()));
+  CHECK_THAT(merged.err, Contains("no record: " + (s.dir / "in" / "n5.txt").string()));
+  CHECK_THAT(merged.err, Contains("no manifest from shard 2/3"));
+
+  // A shard given other inputs than its siblings is refused before it runs.
+  s.input("n8.txt", "8");
+  const Result other = s.batch({"--shard", "2/3"});
+  INFO(show(other));
+  CHECK(other.code == 2);
+  CHECK_THAT(other.err, Contains("inputs.txt lists other inputs than this shard was given"));
+  fs::remove(s.dir / "in" / "n8.txt");
+  REQUIRE(s.batch({"--shard", "2/3"}).code == 0);
+  const Result whole = kinegraph({"merge", s.out.string()});
+  INFO(show(whole));
+  CHECK(whole.code == 0);
+  CHECK_THAT(whole.out, Contains("8 ok, 0 failed, 0 of 8 inputs without a record"));
+}
+
 TEST_CASE(
     "batch with slurm writes an array job and a merge job that, run as Slurm runs them, give the local "
     "outputs",

@@ -74,4 +74,9 @@ void remove_written_files() noexcept;
 // The files read through read_input_file in this process, by canonical path, sorted.
 std::vector<std::filesystem::path> input_files_read();
 
+// Empties the lists above (files written and read) for a forked child that starts a unit of work
+// of its own: the files its parent wrote are not the child's outputs, and an interrupted child
+// must not remove them.
+void forget_files_of_parent_process();
+
 }  // namespace kg
