@@ -49,8 +49,9 @@ class DocumentCheck {
     // every reader walking it would recurse without end.
     for (const auto& open : open_)
       if (open.is(n))
-        throw Error("an alias " + where() + " names a collection that contains it (a cycle no reader can walk)",
-                    located(path_, n.Mark()));
+        throw Error(
+            "an alias " + where() + " names a collection that contains it (a cycle no reader can walk)",
+            located(path_, n.Mark()));
     open_.push_back(n);
     ++distinct_;
     long long count = 1;
@@ -102,7 +103,7 @@ class DocumentCheck {
   long long distinct_ = 0;
   std::unordered_map<int, std::vector<std::pair<YAML::Node, long long>>> seen_;
   std::vector<std::pair<std::string, long long>> path_keys_;  // key, or index of a list item
-  std::vector<YAML::Node> open_;  // the collections being walked, outermost first
+  std::vector<YAML::Node> open_;                              // the collections being walked, outermost first
 };
 
 std::string shown(double v) {

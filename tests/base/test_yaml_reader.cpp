@@ -78,8 +78,9 @@ TEST_CASE("parse_yaml: malformed YAML at its place; nesting beyond yaml-cpp's li
 TEST_CASE("parse_yaml refuses an alias inside the collection it names (a cycle), at its anchor", "[yaml]") {
   CHECK(error_of("a: &a {b: *a}\n") ==
         "f.yaml:1:4: an alias in 'a.b' names a collection that contains it (a cycle no reader can walk)");
-  CHECK_THAT(error_of("nodes:\n  s: &p\n    params:\n      - {factor: *p}\n"),
-             Contains("f.yaml:2:6: an alias in 'nodes.s.params[0].factor' names a collection that contains it"));
+  CHECK_THAT(
+      error_of("nodes:\n  s: &p\n    params:\n      - {factor: *p}\n"),
+      Contains("f.yaml:2:6: an alias in 'nodes.s.params[0].factor' names a collection that contains it"));
   CHECK_THAT(error_of("a: &a [1, [2, *a]]\n"), Contains("in 'a[1][1]' names a collection that contains it"));
   // The same collection named twice beside itself, not inside, is no cycle.
   CHECK(error_of("a: &a {b: 1}\nc: [*a, *a]\n") == "(accepted)");

@@ -200,7 +200,8 @@ TEST_CASE("import options: units auto on every BVH of ../shared/data, said in a 
     // The rate the header's printed digits stand for (0.008333 is 1/120 s), said when it is not
     // 1/Frame Time itself.
     CHECK(in.motion.fps == Approx(1.0 / f.frame_time).epsilon(1e-4));
-    CHECK(contains(in.notes, "s to its printed digits (1/Frame Time = ") == (in.motion.fps != 1.0 / f.frame_time));
+    CHECK(contains(in.notes, "s to its printed digits (1/Frame Time = ") ==
+          (in.motion.fps != 1.0 / f.frame_time));
     CHECK(in.file_frame_time == f.frame_time);
     // A standing human once in metres (the salsa files are the 1.53 m Daz figure shrunk 128
     // times: taken as m, 1.19 m).
@@ -267,8 +268,9 @@ TEST_CASE("import options: fps overrides a lying header (16_01.bvh is 120 fps, s
   CHECK(contains(in.notes, "taken as asf ("));
   kg::io::ImportedMotion header = kg::io::import_bvh(*path, {});
   CHECK(header.motion.fps == 30);  // "Frame Time: 0.033333"
-  CHECK(contains(header.notes, "16_01.bvh: fps 30: Frame Time 0.033333 s is 1/30 s to its printed digits "
-                               "(1/Frame Time = 30.0003); set fps to override"));
+  CHECK(contains(header.notes,
+                 "16_01.bvh: fps 30: Frame Time 0.033333 s is 1/30 s to its printed digits "
+                 "(1/Frame Time = 30.0003); set fps to override"));
   CHECK(!contains(header.notes, "from the options"));
 }
 
