@@ -46,13 +46,14 @@ class ImportBvhNode final : public graph::Node {
   io::ImportOptions options_;
 };
 
-// Both exporters: `format`'s writer over params `path`, `units` and `precision`.
+// Both exporters: `format`'s writer over params `path`, `units`, `precision` and `exact`.
 class ExportNode final : public graph::Node {
  public:
   ExportNode(const graph::Params& p, std::shared_ptr<const io::MotionFormat> format)
       : format_(std::move(format)), path_(p.get<std::string>("path")) {
     options_.units = p.get<std::string>("units");
     options_.precision = static_cast<int>(p.get<std::int64_t>("precision"));
+    options_.exact = p.get<bool>("exact");
     options_.validate();  // a bad setting fails when the graph loads
   }
 
@@ -98,22 +99,28 @@ graph::NodeSpec export_spec(std::string type, std::string doc, std::string path_
       .version = 1,
       .doc = std::move(doc),
       .inputs = {{"motion", "kg.Motion", true, "the clip to write"}},
-      .params = {{.name = "path",
-                  .type = ParamType::OutputPath,
-                  .default_value = std::string{},
-                  .doc = std::move(path_doc),
-                  .required = true},
-                 {.name = "units",
-                  .type = ParamType::Enum,
-                  .default_value = std::string("source"),
-                  .doc = "length unit written: source (the unit the clip was read in), m, cm, mm, inch",
-                  .choices = {"source", "m", "cm", "mm", "inch"}},
-                 {.name = "precision",
-                  .type = ParamType::Int,
-                  .default_value = std::int64_t{6},
-                  .doc = "digits after the decimal point (trailing zeros dropped)",
-                  .min = 1,
-                  .max = 12}},
+      .params =
+          {{.name = "path",
+            .type = ParamType::OutputPath,
+            .default_value = std::string{},
+            .doc = std::move(path_doc),
+            .required = true},
+           {.name = "units",
+            .type = ParamType::Enum,
+            .default_value = std::string("source"),
+            .doc = "length unit written: source (the unit the clip was read in), m, cm, mm, inch",
+            .choices = {"source", "m", "cm", "mm", "inch"}},
+           {.name = "precision",
+            .type = ParamType::Int,
+            .default_value = std::int64_t{6},
+            .doc = "digits after the decimal point (trailing zeros dropped)",
+            .min = 1,
+            .max = 12},
+           {.name = "exact",
+            .type = ParamType::Bool,
+            .default_value = false,
+            .doc = "false: three rotation channels per joint (and three position channels where it has "
+                   "any), as every tool reads; true: the skeleton's own channels (an ASF clavicle's two)"}},
       .side_effects = true,
   };
 }

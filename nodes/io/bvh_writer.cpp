@@ -77,16 +77,30 @@ std::array<double, 3> closest_euler(std::array<double, 3> e, const std::array<do
 // What one joint writes: its channels and where each value comes from.
 struct WrittenJoint {
   std::vector<ChannelKind> channels;
-  // Identity axis: source column per written channel. Otherwise position channels first (their
-  // source columns), then the three rotation channels computed per frame.
+  // Written as read: source column per written channel. Otherwise (converted) position channels
+  // first, each from its source column or, when the joint has none for that axis, -1 for the
+  // OFFSET component it stands in for; then the three rotation channels computed per frame.
   std::vector<int> source;
   bool converted = false;
   std::array<int, 3> order{};  // converted joints: axes of the written rotations
 };
 
-WrittenJoint plan_joint(const Joint& joint) {
+// Three distinct rotation axes, and no or three distinct position axes: what every tool reads.
+bool has_standard_layout(const Joint& joint) {
+  std::array<int, 2> count{0, 0};
+  std::array<std::array<bool, 3>, 2> seen{};
+  for (const motion::Channel& c : joint.channels) {
+    const int rotation = motion::is_rotation(c.kind) ? 1 : 0, axis = motion::axis_index(c.kind);
+    if (seen[rotation][axis]) return false;
+    seen[rotation][axis] = true;
+    ++count[rotation];
+  }
+  return count[1] == 3 && (count[0] == 0 || count[0] == 3);
+}
+
+WrittenJoint plan_joint(const Joint& joint, bool exact) {
   WrittenJoint w;
-  if (is_identity(joint.axis)) {
+  if (is_identity(joint.axis) && (exact || has_standard_layout(joint))) {
     for (std::size_t c = 0; c < joint.channels.size(); ++c) {
       w.channels.push_back(joint.channels[c].kind);
       w.source.push_back(joint.first_channel + static_cast<int>(c));
@@ -95,14 +109,25 @@ WrittenJoint plan_joint(const Joint& joint) {
   }
   w.converted = true;
   std::vector<int> axes;
+  std::array<int, 3> position_column{-1, -1, -1};
+  bool any_position = false;
   for (std::size_t c = 0; c < joint.channels.size(); ++c) {
     const ChannelKind kind = joint.channels[c].kind;
+    const int a = motion::axis_index(kind);
     if (motion::is_rotation(kind)) {
-      const int a = motion::axis_index(kind);
       if (std::find(axes.begin(), axes.end(), a) == axes.end()) axes.push_back(a);
-    } else {
+    } else if (exact) {
       w.channels.push_back(kind);
       w.source.push_back(joint.first_channel + static_cast<int>(c));
+    } else {
+      position_column[static_cast<std::size_t>(a)] = joint.first_channel + static_cast<int>(c);
+      any_position = true;
+    }
+  }
+  if (any_position) {
+    for (int a = 0; a < 3; ++a) {
+      w.channels.push_back(static_cast<ChannelKind>(static_cast<int>(ChannelKind::Xposition) + a));
+      w.source.push_back(position_column[static_cast<std::size_t>(a)]);
     }
   }
   for (int a = 0; a < 3; ++a)
@@ -116,8 +141,8 @@ WrittenJoint plan_joint(const Joint& joint) {
 
 class Writer {
  public:
-  Writer(const motion::Motion& m, double metres_per_unit, int precision)
-      : m_(m), s_(*m.skeleton), mpu_(metres_per_unit), precision_(precision) {}
+  Writer(const motion::Motion& m, double metres_per_unit, int precision, bool exact)
+      : m_(m), s_(*m.skeleton), mpu_(metres_per_unit), precision_(precision), exact_(exact) {}
 
   std::string write() {
     const int n = s_.joint_count();
@@ -128,7 +153,7 @@ class Writer {
       (p < 0 ? roots : children_[static_cast<std::size_t>(p)]).push_back(j);
     }
     plans_.reserve(static_cast<std::size_t>(n));
-    for (int j = 0; j < n; ++j) plans_.push_back(plan_joint(s_.joint(j)));
+    for (int j = 0; j < n; ++j) plans_.push_back(plan_joint(s_.joint(j), exact_));
 
     out_.reserve(static_cast<std::size_t>(m_.frame_count()) * static_cast<std::size_t>(s_.channel_count()) *
                      10 +
@@ -205,12 +230,16 @@ class Writer {
       };
       for (int j : order_) {
         const WrittenJoint& plan = plans_[static_cast<std::size_t>(j)];
+        const Joint& joint = s_.joint(j);
         for (std::size_t c = 0; c < plan.source.size(); ++c) {
+          if (plan.source[c] < 0) {  // a position channel standing in for its OFFSET component
+            put(joint.offset[motion::axis_index(plan.channels[c])] / mpu_);
+            continue;
+          }
           const double v = row(plan.source[c]);
           put(motion::is_rotation(plan.channels[c]) ? v * to_degrees : v / mpu_);
         }
         if (!plan.converted) continue;
-        const Joint& joint = s_.joint(j);
         Eigen::Matrix3d r = Eigen::Matrix3d::Identity();
         for (std::size_t c = 0; c < joint.channels.size(); ++c)
           if (motion::is_rotation(joint.channels[c].kind))
@@ -229,6 +258,7 @@ class Writer {
   const Skeleton& s_;
   double mpu_;
   int precision_;
+  bool exact_;
   std::vector<std::vector<int>> children_;
   std::vector<WrittenJoint> plans_;
   std::vector<int> order_;  // joints depth first, as written
@@ -257,7 +287,7 @@ std::string write_bvh_string(const motion::Motion& motion, const BvhWriteOptions
       options.units == "source" ? motion.skeleton->source_unit_metres : metres_per_unit(options.units);
   if (!(mpu > 0) || !std::isfinite(mpu))
     throw std::invalid_argument("BVH writer: bad unit (" + std::to_string(mpu) + " m per unit)");
-  return Writer(motion, mpu, options.precision).write();
+  return Writer(motion, mpu, options.precision, options.exact).write();
 }
 
 void write_bvh(std::ostream& os, const motion::Motion& motion, const BvhWriteOptions& options) {

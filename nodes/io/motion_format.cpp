@@ -66,7 +66,8 @@ namespace {
 
 void write_bvh_file(std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
   options.validate();
-  write_bvh(os, motion, BvhWriteOptions{.units = options.units, .precision = options.precision});
+  write_bvh(os, motion,
+            BvhWriteOptions{.units = options.units, .precision = options.precision, .exact = options.exact});
 }
 
 bool claims(const MotionFormat& format, const std::string& lower_ext) {

@@ -30,7 +30,7 @@ bool within_print(double a, double b, double scale) {
 void check_round_trip(const kg::io::BvhClip& clip) {
   const kg::motion::Motion& m = clip.motion;
   const kg::motion::Skeleton& s = *m.skeleton;
-  const std::string once = kg::io::write_bvh_string(m, {.precision = kPrecision});
+  const std::string once = kg::io::write_bvh_string(m, {.precision = kPrecision, .exact = true});
   const kg::io::BvhClip again = kg::io::parse_bvh(once, "written.bvh");
   const kg::motion::Skeleton& t = *again.motion.skeleton;
   require(t.joint_count() == s.joint_count(), "the written file has another number of joints");
@@ -70,8 +70,17 @@ void check_round_trip(const kg::io::BvhClip& clip) {
     }
   }
   if (largest < 1e6)
-    require(kg::io::write_bvh_string(again.motion, {.precision = kPrecision}) == once,
+    require(kg::io::write_bvh_string(again.motion, {.precision = kPrecision, .exact = true}) == once,
             "read, written, read and written again the text changes");
+
+  // The default layout, which every tool reads: three rotation channels per joint, three
+  // position channels or none.
+  const kg::io::BvhClip standard =
+      kg::io::parse_bvh(kg::io::write_bvh_string(m, {.precision = kPrecision}), "standard.bvh");
+  require(standard.motion.skeleton->joint_count() == s.joint_count(), "the standard layout lost joints");
+  for (const kg::motion::Joint& j : standard.motion.skeleton->joints())
+    require(j.channels.size() == 3 || j.channels.size() == 6,
+            "joint " + j.name + " written with " + std::to_string(j.channels.size()) + " channels");
 }
 
 }  // namespace

@@ -14,6 +14,7 @@
 
 #include "../support/temp_dir.hpp"
 #include "kg/base/atomic_file.hpp"
+#include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
@@ -122,6 +123,15 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
     clips.emplace_back("16_15", kg::io::import_bvh(*p, {}).motion);
   } else {
     WARN("cmu/bvh_motionbuilder/16_15.bvh not found: only the synthetic clip goes through Blender");
+  }
+  const auto asf = kg::test::data_file("cmu/asf_amc/16.asf"),
+             amc = kg::test::data_file("cmu/asf_amc/16_15.amc");
+  if (asf && amc) {
+    // ASF bones (2-channel clavicles, axes): written with three rotation channels each, which
+    // Blender needs (it refused 2 with KeyError: (2, 1, None)).
+    clips.emplace_back("16_15_asf", kg::io::import_asf_amc(asf->string(), amc->string(), {}).motion);
+  } else {
+    WARN("cmu/asf_amc/16.asf or 16_15.amc not found: no ASF-sourced clip goes through Blender");
   }
 
   std::string command =

@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "../support/temp_dir.hpp"
+#include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/motion/frame_time.hpp"
 #include "kg/motion/kinematics.hpp"
@@ -95,7 +96,7 @@ TEST_CASE("bvh writer: numbers, frame time and layout") {
       " End Site\n {\n  OFFSET 0 10 0\n }\n}\nMOTION\nFrames: 2\nFrame Time: 0.00833333\n"
       "-0.0000004 90 -45.25 1e-13\n2 0.5 -0 12.3456789\n";
   auto clip = parse_bvh(text, "n.bvh");
-  const std::string out = write_bvh_string(clip.motion, {.precision = 6});
+  const std::string out = write_bvh_string(clip.motion, {.precision = 6, .exact = true});
   CHECK(out ==
         "HIERARCHY\nROOT hip\n{\n\tOFFSET 0 0 1.5\n\tCHANNELS 4 Xposition Zrotation Yrotation Xrotation\n"
         "\tEnd Site\n\t{\n\t\tOFFSET 0 10 0\n\t}\n}\nMOTION\nFrames: 2\nFrame Time: 0.00833333333\n"
@@ -291,7 +292,7 @@ TEST_CASE("bvh writer: a skeleton not in depth-first order is written depth firs
   m.values.resize(2, 6);
   m.values << 0.9, 0.1, 0.2, 0.3, 0.4, 0.5,  //
       1.0, -0.1, -0.2, -0.3, -0.4, -0.5;
-  const std::string text = write_bvh_string(m, {.precision = 9});
+  const std::string text = write_bvh_string(m, {.precision = 9, .exact = true});
   CHECK(text.find("JOINT a\n\t{\n\t\tOFFSET 0.2 0 0\n\t\tCHANNELS 1 Zrotation\n\t\tJOINT a1\n") !=
         std::string::npos);
   auto back = parse_bvh(text, "dfs.bvh");
@@ -304,4 +305,81 @@ TEST_CASE("bvh writer: a skeleton not in depth-first order is written depth firs
     CHECK((pa.middleCols(3 * j, 3) - pb.middleCols(3 * k, 3)).cwiseAbs().maxCoeff() < 1e-8);
   }
   CHECK(back.motion.values(1, 3) == Approx(-0.4));  // a1's Xrotation now precedes b's
+}
+
+namespace {
+
+// The CHANNELS count of every joint of a BVH text, in file order.
+std::vector<int> channel_counts(const std::string& text) {
+  std::vector<int> counts;
+  const auto words = tokens(text);
+  for (std::size_t i = 0; i + 1 < words.size(); ++i)
+    if (words[i] == "CHANNELS") counts.push_back(std::stoi(std::string(words[i + 1])));
+  return counts;
+}
+
+// Worst distance (metres) between the joints of `a` and those of the same name in `b`.
+double worst_joint_distance(const kg::motion::Motion& a, const kg::motion::Motion& b) {
+  const auto pa = kg::motion::joint_world_positions(a), pb = kg::motion::joint_world_positions(b);
+  double worst = 0;
+  for (int j = 0; j < a.skeleton->joint_count(); ++j) {
+    const int k = b.skeleton->find_joint(a.skeleton->joint(j).name);
+    REQUIRE(k >= 0);
+    worst = std::max(worst, (pa.middleCols(3 * j, 3) - pb.middleCols(3 * k, 3)).cwiseAbs().maxCoeff());
+  }
+  return worst;
+}
+
+}  // namespace
+
+TEST_CASE(
+    "bvh writer: by default every joint has three rotation channels, and three position channels or none") {
+  // Blender 3.4 refused our ASF-sourced files (KeyError: (2, 1, None) on 2-channel clavicles).
+  kg::motion::Skeleton s;
+  auto add = [&](const std::string& name, int parent, Eigen::Vector3d offset,
+                 std::vector<ChannelKind> kinds) {
+    kg::motion::Joint j = make_joint(name, parent, offset);
+    for (ChannelKind k : kinds) j.channels.push_back({k});
+    return s.add_joint(j);
+  };
+  const int root = add("root", -1, {0.1, 1, 0.2}, {ChannelKind::Yposition, ChannelKind::Yrotation});
+  const int a = add("a", root, {0.2, 0, 0}, {ChannelKind::Zrotation, ChannelKind::Xrotation});
+  add("b", a, {0, -0.4, 0}, {});
+  add("c", root, {-0.2, 0, 0}, {ChannelKind::Zrotation, ChannelKind::Xrotation, ChannelKind::Yrotation});
+  kg::motion::Motion m;
+  m.skeleton = std::make_shared<const kg::motion::Skeleton>(s);
+  m.fps = 50;
+  m.values.resize(2, 7);
+  m.values << 0.9, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6,  //
+      1.0, -0.1, -0.2, -1.3, -0.4, 2.5, -0.6;
+  const std::string text = write_bvh_string(m, {.precision = 12});
+  INFO(text);
+  // The missing axes follow the joint's own, in X, Y, Z order; a lone Yposition gets X and Z from
+  // the OFFSET, which it replaces.
+  CHECK(text.find("ROOT root\n{\n\tOFFSET 0.1 1 0.2\n\tCHANNELS 6 Xposition Yposition Zposition Yrotation "
+                  "Xrotation Zrotation\n") != std::string::npos);
+  CHECK(text.find("CHANNELS 3 Zrotation Xrotation Yrotation\n") != std::string::npos);
+  CHECK(channel_counts(text) == std::vector<int>{6, 3, 3, 3});
+  CHECK(text.find("\n0.1 0.9 0.2 5.729577951308 0 0 ") != std::string::npos);
+  const auto back = parse_bvh(text, "standard.bvh");
+  CHECK(worst_joint_distance(m, back.motion) < 1e-10);
+  // exact keeps the skeleton's own channels.
+  CHECK(channel_counts(write_bvh_string(m, {.exact = true})) == std::vector<int>{2, 2, 0, 3});
+}
+
+TEST_CASE("bvh writer: an ASF/AMC clip is written with three rotation channels per joint, the same motion",
+          "[data]") {
+  const auto asf = kg::test::data_file("cmu/asf_amc/16.asf"),
+             amc = kg::test::data_file("cmu/asf_amc/16_15.amc");
+  if (!asf || !amc) {
+    WARN("skipped: cmu/asf_amc/16.asf or 16_15.amc not found");
+    return;
+  }
+  const kg::motion::Motion source = kg::io::import_asf_amc(asf->string(), amc->string(), {}).motion;
+  const std::string text = write_bvh_string(source, {.units = "cm", .precision = 9});
+  for (int count : channel_counts(text)) CHECK((count == 3 || count == 6));
+  const kg::test::TempDir dir;
+  const kg::io::ImportedMotion back = kg::io::import_bvh(dir.write("16_15.bvh", text), {.units = "cm"});
+  CHECK(back.motion.frame_count() == source.frame_count());
+  CHECK(worst_joint_distance(source, back.motion) < 1e-6);  // metres
 }

@@ -65,6 +65,10 @@ struct BvhWriteOptions {
   std::string units = "source";
   // Digits after the decimal point of every value (1..12); trailing zeros are dropped.
   int precision = 6;
+  // false: every joint has three rotation channels, and three position channels when it has
+  // any, as Blender and MotionBuilder read BVH (a 2-channel ASF clavicle gets its third axis,
+  // a lone Yposition its X and Z from the OFFSET). true: the skeleton's own channels.
+  bool exact = false;
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
@@ -74,10 +78,11 @@ struct BvhWriteOptions {
 // applied: it sits above the roots, so channels and offsets already are file coordinates),
 // degrees, the skeleton's channel orders, joints depth first (roots and children in index
 // order), End Sites after a joint's children, "Frame Time" = 1 / fps with 9 significant digits.
-// A joint whose `axis` is not the identity (ASF bones) cannot be said in BVH: it is written
-// with three rotation channels (its own rotation axes first, in their order, then the missing
-// ones in X, Y, Z order) holding the Euler angles of axis * R * axis^T; position channels are
-// kept. Joint limits are not written. Throws std::invalid_argument on bad options or a motion
+// A joint whose `axis` is not the identity (ASF bones) cannot be said in BVH, nor, unless
+// options.exact, one with other than three rotation channels: it is written with three
+// rotation channels (its own rotation axes first, in their order, then the missing ones in X, Y,
+// Z order) holding the Euler angles of axis * R * axis^T; position channels are kept (made three
+// unless exact). Joint limits are not written. Throws std::invalid_argument on bad options or a motion
 // failing Motion::check().
 void write_bvh(std::ostream& os, const motion::Motion& motion, const BvhWriteOptions& options = {});
 std::string write_bvh_string(const motion::Motion& motion, const BvhWriteOptions& options = {});

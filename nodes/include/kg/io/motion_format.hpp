@@ -26,7 +26,8 @@ struct MotionWriteOptions {
   // Length unit written: "source" (the unit the clip was read in,
   // skeleton->source_unit_metres), "m", "cm", "mm" or "inch".
   std::string units = "source";
-  int precision = 6;  // digits after the decimal point, 1..12 (trailing zeros dropped)
+  int precision = 6;   // digits after the decimal point, 1..12 (trailing zeros dropped)
+  bool exact = false;  // the skeleton's own channels rather than the layout every tool reads (bvh.hpp)
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
