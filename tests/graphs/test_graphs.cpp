@@ -345,12 +345,12 @@ TEST_CASE("graphs/convert.yaml converts every clip in ../shared/data", "[graphs]
     INFO(clip << "\n" << show(r));
     REQUIRE(r.code == 0);
 
-    // The source as the graph read it (auto units and up), and the output read back in the
-    // same unit and up axis: the same clip, to the printed precision of the export.
+    // The source as the graph read it (auto units and up), and the output read back in cm
+    // (output_units' default) and the same up axis: the same clip, to the printed precision of
+    // the export.
     const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
     const auto& skeleton = *source.motion.skeleton;
-    kg::io::ImportOptions same{.units = kg::io::unit_name(skeleton.source_unit_metres),
-                               .up = kg::io::up_axis_name(skeleton.file_to_world)};
+    kg::io::ImportOptions same{.units = "cm", .up = kg::io::up_axis_name(skeleton.file_to_world)};
     const kg::motion::Motion back = kg::io::import_bvh(output, same).motion;
     CHECK(back.frame_count() == source.motion.frame_count());
     CHECK(back.fps == Approx(source.motion.fps).epsilon(1e-8));
@@ -389,9 +389,9 @@ TEST_CASE("graphs/convert.yaml resampling a clip to its own rate keeps every fra
     lines += std::to_string(0.01 * f) + " 90 0 0 0 0 0 " + std::to_string(f % 90) + " 0\n";
   clip = clip.substr(0, frames_at) + "Frames: 300\nFrame Time: 0.0333333\n" + lines;
   const fs::path input = dir.write("clip.bvh", clip), output = dir / "out.bvh";
-  const Result r =
-      kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + input.string(),
-                 "--set", "output=" + output.string(), "--set", "resample=30"});
+  const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
+                              "input=" + input.string(), "--set", "output=" + output.string(), "--set",
+                              "resample=30", "--set", "output_units=source"});
   INFO(show(r));
   REQUIRE(r.code == 0);
   CHECK(r.err.find("Frame Time 0.0333333 s is 1/30 s to its printed digits") != std::string::npos);
