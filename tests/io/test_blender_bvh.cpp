@@ -3,6 +3,7 @@
 // Skips with a visible message when blender is not installed.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -12,10 +13,12 @@
 #include <string>
 #include <vector>
 
+#include "../support/process.hpp"
 #include "../support/temp_dir.hpp"
 #include "kg/base/atomic_file.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/io/motion_format.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "test_bvh_data.hpp"
 
@@ -81,8 +84,9 @@ BlenderPose read_tsv(const fs::path& p) {
   return pose;
 }
 
-// Worst distance (metres) between Blender's heads and ours, converted to Blender's axes.
-double compare(const kg::motion::Motion& m, const BlenderPose& pose, int& compared) {
+// Worst distance (metres) between Blender's heads (in metres per Blender unit `scale`) and ours,
+// converted to Blender's axes.
+double compare(const kg::motion::Motion& m, const BlenderPose& pose, int& compared, double scale = 1) {
   const auto& s = *m.skeleton;
   // Blender's importer maps BVH Y-up to its Z-up: (x, y, z) -> (x, -z, y).
   Eigen::Matrix3d to_blender;
@@ -99,7 +103,7 @@ double compare(const kg::motion::Motion& m, const BlenderPose& pose, int& compar
         continue;
       }
       const Eigen::Vector3d ours = to_blender * (s.file_to_world.transpose() * world[j].translation());
-      worst = std::max(worst, (ours - it->second).norm());
+      worst = std::max(worst, (ours - scale * it->second).norm());
       ++compared;
     }
   }
@@ -158,4 +162,60 @@ TEST_CASE("blender: our BVH export imports in Blender with the same joint positi
     WARN("Blender vs Kinegraph, " << name << ": worst joint distance " << worst * 1e3 << " mm over "
                                   << compared << " joint-frames");
   }
+}
+
+TEST_CASE(
+    "blender: every clip of ../shared/data converted by graphs/convert.yaml imports with our joint positions",
+    "[data]") {
+  if (!have_blender()) {
+    WARN("skipped: blender is not installed (apt-get install blender to run this test)");
+    return;
+  }
+  const fs::path data = fs::path(KG_SOURCE_DIR) / "../shared/data";
+  std::vector<fs::path> clips;
+  if (fs::exists(data))
+    for (const auto& entry : fs::recursive_directory_iterator(data))
+      if (entry.path().extension() == ".bvh" || entry.path().extension() == ".amc")
+        clips.push_back(entry.path());
+  std::sort(clips.begin(), clips.end());
+  if (clips.empty()) {
+    WARN("skipped: no clip in " << data.string());
+    return;
+  }
+  const kg::test::TempDir dir;
+  const fs::path script = fs::path(KG_SOURCE_DIR) / "tests/io/blender_import_bvh.py";
+  std::string command =
+      "blender -b --factory-startup --python-exit-code 1 --python '" + script.string() + "' --";
+  std::vector<std::string> names;
+  for (const fs::path& clip : clips) {
+    const std::string name = clip.parent_path().filename().string() + "_" + clip.stem().string();
+    const kg::test::Result r = kg::test::kinegraph(
+        {"run", (fs::path(KG_SOURCE_DIR) / "graphs/convert.yaml").string(), "--set", "input=" + clip.string(),
+         "--set", "output=" + (dir / (name + ".bvh")).string()});
+    INFO(kg::test::show(r));
+    REQUIRE(r.code == 0);
+    command += " '" + (dir / (name + ".bvh")).string() + "' '" + (dir / (name + ".tsv")).string() + "'";
+    names.push_back(name);
+  }
+  command += " > '" + (dir / "blender.log").string() + "' 2>&1";
+  const int status = std::system(command.c_str());
+  INFO("command: " << command << "\nBlender's output:\n" << kg::test::read_file(dir / "blender.log"));
+  REQUIRE(status == 0);
+
+  double worst_of_all = 0;
+  for (std::size_t i = 0; i < clips.size(); ++i) {
+    INFO(clips[i].string());
+    // The clip as convert.yaml read it (auto units and up); written in cm (output_units), which
+    // Blender's importer takes as its units at global_scale 1.
+    const kg::motion::Motion m = kg::io::import_motion(clips[i].string(), "", {}).motion;
+    const BlenderPose pose = read_tsv(dir / (names[i] + ".tsv"));
+    REQUIRE(pose.heads.size() == std::min<std::size_t>(5, static_cast<std::size_t>(m.frame_count())));
+    int compared = 0;
+    const double worst = compare(m, pose, compared, 0.01);
+    CHECK(compared == static_cast<int>(pose.heads.size()) * m.skeleton->joint_count());
+    CHECK(worst < 1e-4);  // 0.1 mm
+    worst_of_all = std::max(worst_of_all, worst);
+  }
+  WARN("Blender vs Kinegraph over " << clips.size() << " converted clips: worst joint distance "
+                                    << worst_of_all * 1e3 << " mm");
 }
