@@ -255,10 +255,16 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
         base[static_cast<std::size_t>(f)] = low;
       }
     d.points[i].rest_levels = base;
+    const std::size_t plants_before = d.plants.size();
+    int low_run = 0, longest_low_run = 0;  // consecutive frames within height_threshold
+    std::vector<double> low_speeds;        // the point's speed at those frames
     bool in = false;
     int start = 0;
     for (int f = 0; f < frames; ++f) {
       const double h = at(f, i).y() - base[static_cast<std::size_t>(f)], v = speed(f);
+      low_run = h <= o.height_threshold ? low_run + 1 : 0;
+      longest_low_run = std::max(longest_low_run, low_run);
+      if (h <= o.height_threshold) low_speeds.push_back(v);
       if (!in) {
         if (h <= o.height_threshold && v <= o.speed_threshold) {
           in = true;
@@ -270,6 +276,20 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
       }
     }
     if (in) close(start, frames - 1);
+    if (d.plants.size() == plants_before && longest_low_run >= min_frames) {
+      std::ostringstream w;
+      w << d.points[i].name << " gets no plant although it stays within " << o.height_threshold * 100
+        << " cm of its rest level for " << longest_low_run << " frames ("
+        << text::significant(longest_low_run / m.fps, 3) << " s at " << text::significant(m.fps, 4)
+        << " fps): its horizontal speed there is "
+        << text::significant(*std::min_element(low_speeds.begin(), low_speeds.end()), 3) << " to "
+        << text::significant(*std::max_element(low_speeds.begin(), low_speeds.end()), 3) << " m/s (median "
+        << text::significant(percentile(low_speeds, 0.5), 3) << "), and a plant needs " << min_frames
+        << " frames below speed_threshold " << o.speed_threshold
+        << " m/s (a run, or a noisy capture?); raise speed_threshold, or give the plants in a constraint "
+           "file";
+      d.warnings.push_back(w.str());
+    }
   }
   return d;
 }

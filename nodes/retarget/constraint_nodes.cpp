@@ -5,6 +5,7 @@
 #include <limits>
 #include <memory>
 #include <sstream>
+#include <stdexcept>
 
 #include "kg/builtin_nodes.hpp"
 #include "kg/retarget/constraint_io.hpp"
@@ -62,6 +63,7 @@ class FootplantsNode final : public Node {
     make_.flavour = p.get<std::string>("flavour") == "floor" ? retarget::PlantFlavour::Floor
                                                              : retarget::PlantFlavour::Fixed;
     make_.above_floor = p.get<bool>("above_floor");
+    strict_ = p.get<bool>("strict");
     detect_.validate();  // a bad setting fails when the graph loads
     make_.validate();
   }
@@ -70,6 +72,14 @@ class FootplantsNode final : public Node {
     const motion::Motion& m = ctx.input<motion::Motion>("motion");
     const motion::FootplantDetection d = motion::detect_footplants(m, detect_);
     for (const std::string& note : d.notes) ctx.log(note);
+    if (strict_ && !d.warnings.empty())
+      throw std::runtime_error(d.warnings.front() +
+                               (d.warnings.size() > 1
+                                    ? " (and " + std::to_string(d.warnings.size() - 1) + " more point(s))"
+                                    : "") +
+                               "; strict: no plant on a point that touches the floor");
+    for (const std::string& warning : d.warnings) ctx.log("warning: " + warning);
+    ctx.report("points_without_plants", static_cast<std::int64_t>(d.warnings.size()));
     for (std::size_t i = 0; i < d.points.size(); ++i)
       ctx.report("plants." + d.points[i].name, static_cast<std::int64_t>(d.count(static_cast<int>(i))));
     ctx.report("plants", static_cast<std::int64_t>(d.plants.size()));
@@ -91,6 +101,7 @@ class FootplantsNode final : public Node {
  private:
   motion::FootplantOptions detect_;
   retarget::PlantConstraintOptions make_;
+  bool strict_ = false;
 };
 
 // The params of retarget.footplants: motion::FootplantOptions and retarget::PlantConstraintOptions.
@@ -157,6 +168,11 @@ std::vector<ParamSpec> footplants_params() {
                 .type = ParamType::Bool,
                 .default_value = false,
                 .doc = "also keep every foot point above the floor at every frame"},
+      ParamSpec{.name = "strict",
+                .type = ParamType::Bool,
+                .default_value = false,
+                .doc = "true: fail when a point touches the floor (stays within height_threshold of its rest "
+                       "level for min_duration_s) and gets no plant; false: a warning with the numbers"},
       ParamSpec{.name = "character",
                 .type = ParamType::Int,
                 .default_value = std::int64_t{0},

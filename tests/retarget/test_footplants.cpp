@@ -410,3 +410,43 @@ TEST_CASE("retarget.footplants node") {
                      {{"motion", graph::Value::make(walk.motion)}}),
       Catch::Contains("floor 'low'"));
 }
+
+TEST_CASE(
+    "a point that rests at its floor level but gets no plant is a warning with the numbers; strict fails") {
+  // Issue 14: runs got 0 plants and nothing said so. The synthesized walk with its body drifting
+  // sideways at 0.4 m/s (a capture whose feet slide, or a run's rolling stance): no plant.
+  synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});
+  const motion::FootplantDetection honest = motion::detect_footplants(walk.motion, {});
+  CHECK(!honest.plants.empty());
+  CHECK(honest.warnings.empty());
+  REQUIRE(walk.motion.skeleton->joint(0).channels[0].kind == motion::ChannelKind::Xposition);
+  motion::Motion fast = walk.motion;
+  for (int f = 0; f < fast.frame_count(); ++f) fast.values(f, 0) += 0.4 * f / fast.fps;
+  const motion::FootplantDetection d = motion::detect_footplants(fast, {});
+  INFO(describe(d));
+  CHECK(d.plants.empty());
+  REQUIRE(d.warnings.size() == d.points.size());
+  CHECK_THAT(d.warnings[1],
+             Catch::StartsWith("LeftToeBase/end gets no plant although it stays within 3 cm of its "
+                               "rest level for "));
+  CHECK_THAT(d.warnings[1], Catch::Contains("fps): its horizontal speed there is 0.4 to ") &&
+                                Catch::Contains("below speed_threshold 0.15 m/s"));
+  // A speed threshold above the slide gives the plants back, and no warning.
+  const motion::FootplantDetection scaled =
+      motion::detect_footplants(fast, {.speed_threshold = 0.5, .trim_distance = 0});
+  CHECK(scaled.plants.size() >= honest.plants.size() - 2);
+  CHECK(scaled.warnings.empty());
+
+  const graph::Registry registry = test::registry_of(retarget_constraint_node_types());
+  test::NodeContext ctx =
+      test::run_node(registry, "retarget.footplants", test::params_for(registry, "retarget.footplants", {}),
+                     {{"motion", graph::Value::make(fast)}});
+  CHECK(std::get<std::int64_t>(ctx.figures.at("points_without_plants")) == 4);
+  CHECK(ctx.logged("warning: LeftFoot gets no plant although"));
+  CHECK_THROWS_WITH(
+      test::run_node(registry, "retarget.footplants",
+                     test::params_for(registry, "retarget.footplants", {{"strict", true}}),
+                     {{"motion", graph::Value::make(fast)}}),
+      Catch::Contains("LeftFoot gets no plant although") &&
+          Catch::Contains("(and 3 more point(s)); strict: no plant on a point that touches the floor"));
+}

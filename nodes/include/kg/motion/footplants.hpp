@@ -81,7 +81,10 @@ struct FootplantDetection {
   double floor = 0;                // m, world height of the floor (given or estimated)
   bool floor_estimated = false;    // floor was not given
   std::vector<std::string> notes;  // which points were chosen, floor estimate
-  int count(int point) const;      // plants of one point
+  // Points that touch the floor but get no plant: one line each with the numbers (how long the
+  // point stays within height_threshold of its rest level, and how fast it moves there).
+  std::vector<std::string> warnings;
+  int count(int point) const;  // plants of one point
 };
 
 // Node-parameter text for the options above: "LeftFoot, RightToeBase/end" gives the names,
