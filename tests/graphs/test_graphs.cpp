@@ -6,6 +6,7 @@
 #include <map>
 #include <regex>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <yaml-cpp/yaml.h>
@@ -368,9 +369,17 @@ TEST_CASE("graphs/convert.yaml resamples and overrides fps and units", "[graphs]
   // 16_01.bvh says 30 fps but is 120 fps; ASF units (inches / 0.45).
   const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
                               "input=" + jump.string(), "--set", "output=" + (out / "jump.bvh").string(),
-                              "--set", "fps=120", "--set", "units=asf", "--set", "resample=30"});
+                              "--set", "source_fps=120", "--set", "units=asf", "--set", "output_fps=30"});
   INFO(show(r));
   REQUIRE(r.code == 0);
+  // The former names (fps, resample) give the same bytes.
+  const Result former =
+      kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set", "input=" + jump.string(),
+                 "--set", "output=" + (out / "former.bvh").string(), "--set", "fps=120", "--set", "units=asf",
+                 "--set", "resample=30"});
+  INFO(show(former));
+  REQUIRE(former.code == 0);
+  CHECK(read_file(out / "former.bvh") == read_file(out / "jump.bvh"));
   const auto source = kg::io::read_bvh(jump).motion;
   const auto converted = kg::io::read_bvh(out / "jump.bvh").motion;
   CHECK(converted.fps == Approx(30));
@@ -391,7 +400,7 @@ TEST_CASE("graphs/convert.yaml resampling a clip to its own rate keeps every fra
   const fs::path input = dir.write("clip.bvh", clip), output = dir / "out.bvh";
   const Result r = kinegraph({"run", (kSource / "graphs/convert.yaml").string(), "--set",
                               "input=" + input.string(), "--set", "output=" + output.string(), "--set",
-                              "resample=30", "--set", "output_units=source"});
+                              "output_fps=30", "--set", "output_units=source"});
   INFO(show(r));
   REQUIRE(r.code == 0);
   CHECK(r.err.find("Frame Time 0.0333333 s is 1/30 s to its printed digits") != std::string::npos);
@@ -530,4 +539,38 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
   CHECK(r.code == 1);
   CHECK_THAT(r.err, Catch::Contains("never overwritten"));
   CHECK(kg::test::read_file(work / "16.asf") == asf_before);
+}
+
+TEST_CASE("every graph that reads a clip takes units, up, source_fps and output_units, wired to its nodes",
+          "[graphs]") {
+  // One vocabulary (issue 14): each name reaches a node param, so a bad value fails validation
+  // at that param; a graph that declared a name and ignored it would say "valid".
+  const fs::path clip = kSource / "tests/graphs/data/two_joints.bvh";
+  int checked = 0;
+  for (const auto& entry : fs::recursive_directory_iterator(kSource / "graphs")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string text = read_file(entry.path());
+    if (text.find("\nnodes:") == std::string::npos || text.find("\n  input:") == std::string::npos) continue;
+    INFO(entry.path().string());
+    ++checked;
+    std::vector<std::string> base{"validate", entry.path().string(), "--set", "input=" + clip.string()};
+    if (text.find("\n  pin_source:") != std::string::npos)
+      for (const char* pin : {"pin_source=0.1", "pin_output=0.1"}) base.insert(base.end(), {"--set", pin});
+    const Result valid = kinegraph(base);
+    INFO(show(valid));
+    CHECK(valid.code == 0);
+    for (const auto& [name, bad, expected] : std::vector<std::tuple<std::string, std::string, std::string>>{
+             {"units", "furlong", "furlong"},
+             {"up", "w", "'w'"},
+             {"source_fps", "-1", "-1"},
+             {"output_units", "furlong", "furlong"}}) {
+      std::vector<std::string> args = base;
+      args.insert(args.end(), {"--set", name + "=" + bad});
+      const Result r = kinegraph(args);
+      INFO(name << "=" << bad << "\n" << show(r));
+      CHECK(r.code == 3);
+      CHECK_THAT(r.err, Catch::Contains(expected));
+    }
+  }
+  CHECK(checked >= 7);
 }
