@@ -70,30 +70,76 @@ struct Extent {
 };
 
 // Rest pose: OFFSETs only, no channel applied (translations as the hierarchy states them).
-Extent rest_extent(const Skeleton& s) {
+// Joints marked in `skip` (a static root chain) and their End Sites are left out.
+Extent rest_extent(const Skeleton& s, const std::vector<bool>& skip) {
   Extent e;
   std::vector<Eigen::Vector3d> pos(static_cast<std::size_t>(s.joint_count()));
   for (int j = 0; j < s.joint_count(); ++j) {
     const motion::Joint& joint = s.joint(j);
     pos[j] = joint.parent < 0 ? joint.offset : Eigen::Vector3d(pos[joint.parent] + joint.offset);
+    if (skip[static_cast<std::size_t>(j)]) continue;
     e.add(pos[j]);
     for (const Eigen::Vector3d& tip : joint.end_sites) e.add(pos[j] + tip);
   }
   return e;
 }
 
-// One frame posed, in file coordinates (file_to_world undone).
-Extent frame_extent(const motion::Motion& m, int frame) {
+// One frame posed, in file coordinates (file_to_world undone), without the joints in `skip`.
+Extent frame_extent(const motion::Motion& m, int frame, const std::vector<bool>& skip) {
   const Skeleton& s = *m.skeleton;
   std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(s.joint_count()));
   motion::forward_kinematics(s, m.values.row(frame), world);
   const Eigen::Matrix3d to_file = s.file_to_world.transpose();
   Extent e;
   for (int j = 0; j < s.joint_count(); ++j) {
+    if (skip[static_cast<std::size_t>(j)]) continue;
     e.add(to_file * world[j].translation());
     for (const Eigen::Vector3d& tip : s.joint(j).end_sites) e.add(to_file * (world[j] * tip));
   }
   return e;
+}
+
+// The frames the up axis is judged on: kUpSamples spread through the clip, first and last included.
+std::vector<int> sampled_frames(int frames) {
+  std::vector<int> out;
+  const int samples = std::min(frames, kUpSamples);
+  for (int k = 0; k < samples; ++k)
+    out.push_back(samples == 1 ? 0
+                               : static_cast<int>((static_cast<long long>(frames - 1) * k) / (samples - 1)));
+  return out;
+}
+
+// A static root chain: from the single root down, each joint with one child that stays at one
+// place in every sampled frame (an exporter's "Root" at the origin while its Hips child carries
+// the translation). Its origin is no part of the figure: left in, a walk away from it spans metres
+// along the walking direction in every frame. Returns the mask (true: skipped) and their names.
+std::pair<std::vector<bool>, std::string> static_root_chain(const motion::Motion& m) {
+  const Skeleton& s = *m.skeleton;
+  std::vector<bool> skip(static_cast<std::size_t>(s.joint_count()), false);
+  std::string names;
+  std::vector<std::vector<int>> children(static_cast<std::size_t>(s.joint_count()));
+  std::vector<int> roots;
+  for (int j = 0; j < s.joint_count(); ++j)
+    (s.joint(j).parent < 0 ? roots : children[static_cast<std::size_t>(s.joint(j).parent)]).push_back(j);
+  if (roots.size() != 1 || m.frame_count() == 0) return {skip, names};
+  std::vector<std::vector<Eigen::Isometry3d>> posed;
+  for (int f : sampled_frames(m.frame_count())) {
+    posed.emplace_back(static_cast<std::size_t>(s.joint_count()));
+    motion::forward_kinematics(s, m.values.row(f), posed.back());
+  }
+  for (int j = roots.front(); children[static_cast<std::size_t>(j)].size() == 1;
+       j = children[static_cast<std::size_t>(j)].front()) {
+    const Eigen::Vector3d first = posed.front()[static_cast<std::size_t>(j)].translation();
+    double moved = 0, size = first.norm();
+    for (const auto& world : posed) {
+      moved = std::max(moved, (world[static_cast<std::size_t>(j)].translation() - first).norm());
+      size = std::max(size, world[static_cast<std::size_t>(j)].translation().norm());
+    }
+    if (moved > 1e-9 * std::max(1.0, size)) break;
+    skip[static_cast<std::size_t>(j)] = true;
+    names += (names.empty() ? "" : ", ") + text::in_quotes(s.joint(j).name);
+  }
+  return {skip, names};
 }
 
 // Offsets, end sites and values all finite (converting units can overflow absurd numbers).
@@ -157,9 +203,10 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
   skeleton->file_to_world = Eigen::Matrix3d::Identity();
   m.skeleton = skeleton;  // frame_extent reads it
 
-  const Extent rest = rest_extent(*skeleton);
+  const auto [skip, static_roots] = static_root_chain(m);
+  const Extent rest = rest_extent(*skeleton, skip);
   const bool has_frames = m.frame_count() > 0;
-  const Extent posed = has_frames ? frame_extent(m, 0) : rest;
+  const Extent posed = has_frames ? frame_extent(m, 0, skip) : rest;
 
   // Up axis.
   int up = 1;
@@ -171,22 +218,22 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
     double ey = rest.along(1), ez = rest.along(2);
     std::string pose = "the rest pose";
     if (has_frames) {
-      const int n = m.frame_count();
-      const int samples = std::min(n, kUpSamples);
+      const std::vector<int> frames = sampled_frames(m.frame_count());
       std::vector<double> ys, zs;
-      for (int k = 0; k < samples; ++k) {
-        const int f =
-            samples == 1 ? 0 : static_cast<int>((static_cast<long long>(n - 1) * k) / (samples - 1));
-        const Extent e = f == 0 ? posed : frame_extent(m, f);
+      for (int f : frames) {
+        const Extent e = f == 0 ? posed : frame_extent(m, f, skip);
         ys.push_back(e.along(1));
         zs.push_back(e.along(2));
       }
       ey = median(ys);
       ez = median(zs);
-      pose = samples == 1 ? std::string("frame 0") : "the median of " + std::to_string(samples) + " frames";
+      pose = frames.size() == 1 ? std::string("frame 0")
+                                : "the median of " + std::to_string(frames.size()) + " frames";
     }
-    const std::string spans =
+    std::string spans =
         pose + " spans " + fmt("%.4g", ey) + " along Y and " + fmt("%.4g", ez) + " along Z (file units)";
+    if (!static_roots.empty())
+      spans += " without the static root joint(s) " + static_roots + " (at one place in every frame)";
     if (ez > kUpMargin * ey) {
       up = 2;
       notes.push_back(prefix + "up auto: " + spans + ", taken as Z up");

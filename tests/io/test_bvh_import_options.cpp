@@ -2,6 +2,7 @@
 // says so, Z-up handling, scaling of everything that is a length, fps overrides.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -9,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "../support/temp_dir.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
 #include "kg/io/nodes.hpp"
@@ -18,6 +20,7 @@
 using kg::io::apply_import_options;
 using kg::io::ImportOptions;
 using kg::io::parse_bvh;
+using kg::motion::ChannelKind;
 
 namespace {
 
@@ -290,4 +293,49 @@ TEST_CASE("import options: a BVH of zero frames scales its skeleton and has no v
   CHECK(m.values.cols() == 6);
   CHECK(m.skeleton->joint(0).end_sites[0].isApprox(Eigen::Vector3d(0, 1.7, 0)));
   CHECK(m.fps == Approx(30.0).epsilon(1e-5));
+}
+
+TEST_CASE("import options: a static root joint above the figure changes neither up nor units") {
+  // Issue 14: a walk whose root stays at the origin while its hips child carries the translation
+  // (the Bandai Namco layout) was taken as Z up: the origin and the walker spanned metres along
+  // the walking direction in every frame. Each real clip, given such a root and walked 4 of its
+  // heights along file Z away from it, is read as before.
+  int seen = 0;
+  for (const auto& f : kg::test::bvh_data_files()) {
+    auto path = kg::test::data_file(f.path);
+    if (!path) continue;
+    INFO(f.path);
+    const kg::io::BvhClip clip = kg::io::read_bvh(*path);
+    const kg::motion::Skeleton& s = *clip.motion.skeleton;
+    const auto& root_channels = s.joint(0).channels;
+    const auto z = std::find_if(root_channels.begin(), root_channels.end(), [](const kg::motion::Channel& c) {
+      return c.kind == ChannelKind::Zposition;
+    });
+    if (z == root_channels.end()) continue;
+    ++seen;
+    kg::motion::Skeleton t;
+    t.add_joint({.name = "static_root", .parent = -1});
+    for (int j = 0; j < s.joint_count(); ++j) {
+      kg::motion::Joint joint = s.joint(j);
+      joint.parent = joint.parent < 0 ? 0 : joint.parent + 1;
+      t.add_joint(joint);
+    }
+    kg::motion::Motion moved = clip.motion;
+    moved.skeleton = std::make_shared<const kg::motion::Skeleton>(std::move(t));
+    const kg::io::ImportedMotion before = kg::io::import_bvh(*path, {});
+    const double height =
+        extent_y(world_points(before.motion, 0)) / before.motion.skeleton->source_unit_metres;
+    const int column = static_cast<int>(z - root_channels.begin());
+    for (int frame = 0; frame < moved.frame_count(); ++frame)
+      moved.values(frame, column) += 4 * height * frame / std::max(1, moved.frame_count() - 1);
+    const kg::test::TempDir dir;
+    const auto file = dir.write("static_root.bvh", kg::io::write_bvh_string(moved, {.precision = 9}));
+    const kg::io::ImportedMotion after = kg::io::import_bvh(file, {});
+    INFO(all(after.notes));
+    CHECK(kg::io::up_axis_name(after.motion.skeleton->file_to_world) == "y");
+    CHECK(after.motion.skeleton->source_unit_metres == before.motion.skeleton->source_unit_metres);
+    CHECK(contains(after.notes,
+                   "without the static root joint(s) 'static_root' (at one place in every frame)"));
+  }
+  if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
 }
