@@ -75,10 +75,10 @@ void load_plugins(Host& host, const Options& o, const fs::path& prefix) {
 namespace {
 
 void load_graph_plugins(Host& host, const graph::GraphDocument& document, const fs::path& file,
-                        const std::map<std::string, std::string>& sets) {
+                        const std::map<std::string, std::string>& sets, bool allow_missing) {
   std::vector<graph::PluginEntry> entries;
   try {
-    entries = document.plugins(sets);
+    entries = document.plugins(sets, allow_missing);
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   }
@@ -96,25 +96,41 @@ void load_graph_plugins(Host& host, const graph::GraphDocument& document, const 
   }
 }
 
-}  // namespace
-
-graph::Graph load_graph(Host& host, const fs::path& file, const std::map<std::string, std::string>& sets) {
+// The graph file parsed once, and the plugins it names loaded, as they provide node types.
+graph::GraphDocument open_graph(Host& host, const fs::path& file,
+                                const std::map<std::string, std::string>& sets, bool allow_missing) {
   std::error_code ec;
   if (!fs::is_regular_file(file, ec)) {
     throw Failure{kExitGraphInvalid, file.string() + ": no such graph file"};
   }
-  // One parse for the plugins and the graph; the plugins first, as they provide node types.
   std::optional<graph::GraphDocument> document;
   try {
     document = graph::GraphDocument::from_file(file);
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, e.what()};
   }
-  load_graph_plugins(host, *document, file, sets);
+  load_graph_plugins(host, *document, file, sets, allow_missing);
+  return *document;
+}
+
+}  // namespace
+
+graph::Graph load_graph(Host& host, const fs::path& file, const std::map<std::string, std::string>& sets) {
+  const graph::GraphDocument document = open_graph(host, file, sets, false);
   try {
-    return document->load(host.registry, sets);
+    return document.load(host.registry, sets);
   } catch (const kg::Error& e) {
     throw Failure{kExitGraphInvalid, e.what()};
+  } catch (const std::exception& e) {
+    throw Failure{kExitGraphInvalid, file.string() + ": " + e.what()};
+  }
+}
+
+graph::GraphCheck check_graph(Host& host, const fs::path& file,
+                              const std::map<std::string, std::string>& sets) {
+  const graph::GraphDocument document = open_graph(host, file, sets, true);
+  try {
+    return document.check(host.registry, sets);
   } catch (const std::exception& e) {
     throw Failure{kExitGraphInvalid, file.string() + ": " + e.what()};
   }

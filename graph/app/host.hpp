@@ -15,6 +15,7 @@
 #include "kg/graph/graph.hpp"
 #include "kg/graph/plugin_loader.hpp"
 #include "kg/graph/registry.hpp"
+#include "kg/graph/yaml_io.hpp"
 #include "options.hpp"
 
 namespace kg::app {
@@ -48,6 +49,11 @@ void load_plugins(Host& host, const Options& o, const std::filesystem::path& pre
 // Loads the plugins `file` names (step 4), then the graph with `sets` as its variables.
 graph::Graph load_graph(Host& host, const std::filesystem::path& file,
                         const std::map<std::string, std::string>& sets);
+
+// What `validate` reports: as load_graph, with every problem collected, the required variables
+// given no value listed rather than refused, and input paths checked (graph::GraphDocument::check).
+graph::GraphCheck check_graph(Host& host, const std::filesystem::path& file,
+                              const std::map<std::string, std::string>& sets);
 
 // "graphs/x.yaml:12:3: node solve (retarget.spacetime) failed: ..." for each node that failed.
 std::vector<std::string> node_failures(const graph::Graph& g, const graph::RunResult& result);

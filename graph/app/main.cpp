@@ -73,6 +73,28 @@ int run(Host& host, const Options& o) {
   return code;
 }
 
+// Every problem, one line each; a graph without problems is valid even when a run needs values.
+int validate(Host& host, const Options& o) {
+  const graph::GraphCheck check = check_graph(host, o.graph, o.sets);
+  for (const kg::Error& problem : check.problems) std::cerr << "kinegraph: " << problem.what() << '\n';
+  if (!check.problems.empty()) {
+    std::cerr << "kinegraph: " << o.graph.string() << ": invalid: " << check.problems.size()
+              << (check.problems.size() == 1 ? " problem" : " problems") << '\n';
+    return kExitGraphInvalid;
+  }
+  std::cout << o.graph.string() << ": valid: " << check.graph.nodes.size() << " nodes, "
+            << check.graph.connections.size() << " connections\n";
+  if (!check.needed.empty()) {
+    std::cout << "a run needs:";
+    for (const graph::Variable& v : check.needed) std::cout << " --set " << v.name << "=...";
+    std::cout << '\n';
+    for (const graph::Variable& v : check.needed)
+      if (!v.doc.empty()) std::cout << "  " << v.name << ": " << v.doc << '\n';
+    std::cout << "(params that use them are checked when they are given)\n";
+  }
+  return kExitOk;
+}
+
 int dispatch(const Options& o, const char* argv0) {
   switch (o.verb) {
     case Verb::Help:
@@ -95,12 +117,8 @@ int dispatch(const Options& o, const char* argv0) {
       return run(host, o);
     case Verb::Batch:
       return batch(host, o, argv0);
-    case Verb::Validate: {
-      const graph::Graph g = load_graph(host, o.graph, o.sets);
-      std::cout << o.graph.string() << ": valid: " << g.nodes.size() << " nodes, " << g.connections.size()
-                << " connections\n";
-      return kExitOk;
-    }
+    case Verb::Validate:
+      return validate(host, o);
     case Verb::Dot: {
       const graph::Graph g = load_graph(host, o.graph, o.sets);
       write_dot(std::cout, g, host.registry);

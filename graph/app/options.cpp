@@ -22,7 +22,7 @@ struct VerbName {
 constexpr VerbName kVerbs[] = {
     {"run", Verb::Run, "check GRAPH completely, then run it"},
     {"validate", Verb::Validate,
-     "check GRAPH (node types, ports, port types, params, variables) without running it"},
+     "check GRAPH without running it: every problem it has, the values a run needs, inputs given"},
     {"nodes", Verb::Nodes, "list every node type: ports, params, defaults, ranges, choices, docs and origin"},
     {"dot", Verb::Dot, "print GRAPH as Graphviz: kinegraph dot GRAPH | dot -Tsvg > graph.svg"},
     {"batch", Verb::Batch, "run GRAPH once per input file, each item in its own process, with a manifest"},
@@ -277,7 +277,9 @@ usage:
 verbs:
   run       check GRAPH completely, then run it; a failing node is reported with its id and
             its downstream nodes are skipped, the other branches still run
-  validate  check GRAPH (node types, ports, port types, params, variables) without running it
+  validate  check GRAPH (node types, ports, port types, params, variables, input files given)
+            without running it; reports every problem, and names the required variables a run
+            still needs (the params they reach are checked once they are given)
   nodes     list every node type: ports with types, params with types, defaults, ranges,
             choices and docs, and where each type comes from (built-ins, the plugins shipped
             in <prefix>/lib/kinegraph/plugins, and those of --plugin-dir and KINEGRAPH_PLUGIN_PATH)

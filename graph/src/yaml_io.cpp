@@ -68,7 +68,9 @@ struct Entry {
 
 class Loader {
  public:
-  explicit Loader(std::string file) : file_(std::move(file)) {}
+  // With `problems`, attempt() records each Error and goes on (validate reports every problem).
+  explicit Loader(std::string file, std::vector<Error>* problems = nullptr)
+      : file_(std::move(file)), problems_(problems) {}
 
   const std::string& file() const { return file_; }
 
@@ -84,6 +86,24 @@ class Loader {
   [[noreturn]] void fail(const std::string& message, const SourceLocation& where) const {
     throw Error(message, where);
   }
+
+  // Runs `step`. Collecting, an Error it throws is recorded and false returned, so the caller
+  // goes on with the next item; otherwise the Error leaves.
+  template <class Step>
+  bool attempt(Step&& step) const {
+    if (!problems_) {
+      step();
+      return true;
+    }
+    try {
+      step();
+      return true;
+    } catch (const Error& e) {
+      problems_->push_back(e);
+      return false;
+    }
+  }
+  bool collecting() const { return problems_ != nullptr; }
 
   YAML::Node parse(const std::string& text) const {
     const YAML::Node root = parse_yaml(text, file_);
@@ -134,13 +154,20 @@ class Loader {
 
  private:
   std::string file_;
+  std::vector<Error>* problems_;
 };
 
 // ---- variables -----------------------------------------------------------------------------
 
 class Variables {
  public:
-  Variables(const Loader& loader) : loader_(loader) {}
+  // With `missing`, a required variable without a value is recorded there and stands for an
+  // unknown value (validate of a graph given no --set); otherwise it is an Error.
+  explicit Variables(const Loader& loader, std::vector<Variable>* missing = nullptr)
+      : loader_(loader), missing_(missing) {}
+
+  // Whether `text`, substituted, holds the value of a missing required variable.
+  static bool is_unknown(const std::string& text) { return text.find(kUnknownMark) != std::string::npos; }
 
   void declare(Variable v) { declared_.push_back(std::move(v)); }
 
@@ -239,6 +266,10 @@ class Variables {
     const Variable* v = find(name);
     if (!v) undefined(name, used_at);
     if (auto it = overrides_->find(name); it != overrides_->end()) return values_[name] = it->second;
+    if (v->required && missing_) {
+      missing_->push_back(*v);
+      return values_[name] = kUnknownMark + name + kUnknownMark;
+    }
     if (v->required)
       loader_.fail("variable " + text::in_quotes(name) + " is required and has no value: pass --set " + name +
                        "=value" + (v->doc.empty() ? std::string() : " (" + v->doc + ")"),
@@ -259,7 +290,10 @@ class Variables {
     return values_[name] = std::move(value);
   }
 
+  static constexpr char kUnknownMark = '\x01';
+
   const Loader& loader_;
+  std::vector<Variable>* missing_;
   std::vector<Variable> declared_;
   std::map<std::string, std::string> values_;
   const std::map<std::string, std::string>* overrides_ = nullptr;
@@ -367,8 +401,10 @@ Head read_head(const Loader& L, Variables& vars, const YAML::Node& root,
       if (!item.IsScalar())
         L.fail(text::in_quotes(path) + " must be a plugin name or path, got " + kind_of(item), L.at(item));
       std::string entry = vars.substitute(item.Scalar(), L.at(item));
-      // An entry that is empty after substitution is an optional plugin left out.
-      if (!text::trim(entry).empty()) h.plugins.push_back({std::move(entry), L.at(item)});
+      // An entry that is empty after substitution is an optional plugin left out; one naming a
+      // missing variable's value cannot be loaded.
+      if (!text::trim(entry).empty() && !Variables::is_unknown(entry))
+        h.plugins.push_back({std::move(entry), L.at(item)});
     }
   }
   return h;
@@ -571,6 +607,8 @@ std::string canonical_text(const std::string& path) {
   return p.string();
 }
 
+// Outputs that would overwrite an input or each other; collecting (validate), also inputs that do
+// not exist and that no node of the graph writes.
 void check_paths(const Loader& L, const Graph& g, const Registry& registry, const ParamPlaces& places) {
   struct PathUse {
     std::size_t node;
@@ -585,7 +623,7 @@ void check_paths(const Loader& L, const Graph& g, const Registry& registry, cons
       if (p.type != ParamType::InputPath && p.type != ParamType::OutputPath) continue;
       if (!g.nodes[i].params.has(p.name)) continue;
       const std::string& text = g.nodes[i].params.get<std::string>(p.name);
-      if (text::trim(text).empty()) continue;
+      if (text::trim(text).empty() || Variables::is_unknown(text)) continue;
       (p.type == ParamType::InputPath ? inputs : outputs).push_back({i, p.name, text, canonical_text(text)});
     }
   }
@@ -599,15 +637,33 @@ void check_paths(const Loader& L, const Graph& g, const Registry& registry, cons
   for (std::size_t o = 0; o < outputs.size(); ++o) {
     for (const PathUse& in : inputs)
       if (outputs[o].canonical == in.canonical)
-        L.fail(name(outputs[o]) + " would overwrite input " + text::in_quotes(in.text) + " (read by " +
-                   name(in) + " at " + place(in).to_string() + "): " + text::in_quotes(outputs[o].text) +
-                   " is the same file",
-               place(outputs[o]));
+        L.attempt([&] {
+          L.fail(name(outputs[o]) + " would overwrite input " + text::in_quotes(in.text) + " (read by " +
+                     name(in) + " at " + place(in).to_string() + "): " + text::in_quotes(outputs[o].text) +
+                     " is the same file",
+                 place(outputs[o]));
+        });
     for (std::size_t p = 0; p < o; ++p)
       if (outputs[o].canonical == outputs[p].canonical)
-        L.fail(name(outputs[o]) + " writes " + text::in_quotes(outputs[o].text) + ", which " +
-                   name(outputs[p]) + " (" + place(outputs[p]).to_string() + ") writes too",
-               place(outputs[o]));
+        L.attempt([&] {
+          L.fail(name(outputs[o]) + " writes " + text::in_quotes(outputs[o].text) + ", which " +
+                     name(outputs[p]) + " (" + place(outputs[p]).to_string() + ") writes too",
+                 place(outputs[o]));
+        });
+  }
+  // A run reports a missing input when the node reading it runs, after the solves before it.
+  if (!L.collecting()) return;
+  for (const PathUse& in : inputs) {
+    std::error_code ec;
+    if (fs::exists(in.text, ec)) continue;
+    const bool written_here = std::any_of(outputs.begin(), outputs.end(),
+                                          [&](const PathUse& out) { return out.canonical == in.canonical; });
+    if (written_here) continue;
+    L.attempt([&] {
+      L.fail(name(in) + " reads " + text::in_quotes(in.text) + ", which does not exist" +
+                 (ec ? " (" + ec.message() + ")" : std::string()),
+             place(in));
+    });
   }
 }
 
@@ -640,10 +696,64 @@ std::vector<std::size_t> find_cycle(std::size_t n, const std::vector<Connection>
   return cycle;
 }
 
+// The node's id, map and type checked; nullptr (and the problem recorded) when its type is unknown.
+const NodeType* read_node_type(const Loader& L, const Registry& registry, const Entry& e,
+                               std::vector<Entry>& fields) {
+  const std::string path = text::key_path("nodes", e.key);
+  const SourceLocation where = L.at(e.key_node);
+  if (!is_identifier(e.key, true))
+    L.fail("node id " + text::in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);
+  if (!e.value.IsMap())
+    L.fail(text::in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " +
+               kind_of(e.value),
+           L.at(e));
+  fields = L.entries(e.value, path);
+  L.attempt([&] { L.check_keys(fields, path, kNodeKeys); });
+  if (const Entry* doc = Loader::find(fields, "doc"))
+    L.attempt([&] { L.scalar(*doc, text::in_quotes(path + ".doc")); });
+  const Entry* type_entry = Loader::find(fields, "type");
+  if (!type_entry) L.fail("node " + text::in_quotes(e.key) + " has no 'type'", where);
+  const std::string type = L.scalar(*type_entry, text::in_quotes(path + ".type"));
+  if (type.empty()) L.fail("node " + text::in_quotes(e.key) + " has an empty 'type'", L.at(*type_entry));
+  const NodeType* node_type = registry.find_node(type);
+  if (!node_type) {
+    const auto names = registry.node_type_names();
+    std::string message =
+        "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
+    const std::string near = nearest_name(type, names);
+    if (!near.empty())
+      message += "; did you mean " + text::in_quotes(near) + "?";
+    else if (names.empty())
+      message += " (no node types are registered: were the plugins loaded?)";
+    else
+      message += " (`kinegraph nodes` lists the " + std::to_string(names.size()) + " known types)";
+    L.fail(message, L.at(*type_entry));
+  }
+  return node_type;
+}
+
+// Whether `value` (a param's scalar or list), substituted, holds a missing variable's value.
+bool names_unknown(const Variables& vars, const Loader& L, const YAML::Node& value) {
+  auto unknown = [&](const YAML::Node& n) {
+    if (!n.IsScalar()) return false;
+    try {
+      return Variables::is_unknown(vars.substitute(n.Scalar(), L.at(n)));
+    } catch (const Error&) {
+      return false;  // the param's reader reports it
+    }
+  };
+  if (value.IsSequence()) return std::any_of(value.begin(), value.end(), unknown);
+  return unknown(value);
+}
+
+// Collecting (`problems` given), every problem the graph has is recorded and the graph returned
+// as far as it could be read, its nodes made only when all was well; `missing` then receives the
+// required variables given no value, which stand for unknown values that are not checked.
 Graph build(const YAML::Node& root, const std::string& file_name, const fs::path& file,
-            const Registry& registry, const std::map<std::string, std::string>& overrides) {
-  Loader L(file_name);
-  Variables vars(L);
+            const Registry& registry, const std::map<std::string, std::string>& overrides,
+            std::vector<Error>* problems = nullptr, std::vector<Variable>* missing = nullptr) {
+  Loader L(file_name, problems);
+  Variables vars(L, missing);
   Head head = read_head(L, vars, root, overrides);
 
   Graph g;
@@ -659,78 +769,76 @@ Graph build(const YAML::Node& root, const std::string& file_name, const fs::path
     L.fail("the graph has no nodes (add a 'nodes:' map of id: {type: ..., params: {...}})",
            nodes ? L.at(nodes->key_node) : L.at(head.root));
   std::map<std::string, std::size_t> index;
+  std::set<std::string> unreadable;  // nodes whose type is not known: connections to them are not checked
+  std::vector<bool> makeable;        // per node: its params all read and known
   ParamPlaces places;
   for (const Entry& e : L.entries(nodes->value, "nodes")) {
-    const std::string path = text::key_path("nodes", e.key);
-    const SourceLocation where = L.at(e.key_node);
-    if (!is_identifier(e.key, true))
-      L.fail("node id " + text::in_quotes(e.key) + " may hold only letters, digits, '_' and '-'", where);
-    if (!e.value.IsMap())
-      L.fail(text::in_quotes(path) + " must be a map like {type: stage.name, params: {...}}, got " +
-                 kind_of(e.value),
-             L.at(e));
-    const auto fields = L.entries(e.value, path);
-    L.check_keys(fields, path, kNodeKeys);
-    if (const Entry* doc = Loader::find(fields, "doc")) L.scalar(*doc, text::in_quotes(path + ".doc"));
-    const Entry* type_entry = Loader::find(fields, "type");
-    if (!type_entry) L.fail("node " + text::in_quotes(e.key) + " has no 'type'", where);
-    const std::string type = L.scalar(*type_entry, text::in_quotes(path + ".type"));
-    if (type.empty()) L.fail("node " + text::in_quotes(e.key) + " has an empty 'type'", L.at(*type_entry));
-    const NodeType* node_type = registry.find_node(type);
-    if (!node_type) {
-      const auto names = registry.node_type_names();
-      std::string message =
-          "unknown node type " + text::in_quotes(type) + " for node " + text::in_quotes(e.key);
-      const std::string near = nearest_name(type, names);
-      if (!near.empty())
-        message += "; did you mean " + text::in_quotes(near) + "?";
-      else if (names.empty())
-        message += " (no node types are registered: were the plugins loaded?)";
-      else
-        message += " (`kinegraph nodes` lists the " + std::to_string(names.size()) + " known types)";
-      L.fail(message, L.at(*type_entry));
+    std::vector<Entry> fields;
+    const NodeType* node_type = nullptr;
+    if (!L.attempt([&] { node_type = read_node_type(L, registry, e, fields); })) {
+      unreadable.insert(e.key);
+      continue;
     }
     const NodeSpec& spec = node_type->spec;
+    const std::string path = text::key_path("nodes", e.key);
 
     NodeInstance node;
     node.id = e.key;
-    node.type = type;
-    node.where = where;
+    node.type = spec.type;
+    node.where = L.at(e.key_node);
     const std::size_t node_index = g.nodes.size();
+    bool complete = true;
+    std::set<std::string> unknown_params;
     if (const Entry* ps = Loader::find(fields, "params")) {
       ParamReader reader(L, vars, node.id, spec);
-      for (const Entry& pe : L.entries(ps->value, path + ".params")) {
-        const ParamSpec* p = spec.find_param(pe.key);
-        if (!p) {
-          std::vector<std::string> names;
-          for (const ParamSpec& q : spec.params) names.push_back(q.name);
-          L.fail("unknown param " + text::in_quotes(pe.key) + " for node " + text::in_quotes(node.id) + " (" +
-                     type + ")" + did_you_mean(pe.key, names) +
-                     (names.empty() ? " (it takes no params)" : " (params: " + text::join(names) + ")"),
-                 L.at(pe.key_node));
-        }
-        node.params.set(p->name, reader.read(*p, pe));
-        places[{node_index, p->name}] = L.at(pe);
+      std::vector<Entry> given;
+      complete = L.attempt([&] { given = L.entries(ps->value, path + ".params"); });
+      for (const Entry& pe : given) {
+        complete &= L.attempt([&] {
+          const ParamSpec* p = spec.find_param(pe.key);
+          if (!p) {
+            std::vector<std::string> names;
+            for (const ParamSpec& q : spec.params) names.push_back(q.name);
+            L.fail("unknown param " + text::in_quotes(pe.key) + " for node " + text::in_quotes(node.id) +
+                       " (" + spec.type + ")" + did_you_mean(pe.key, names) +
+                       (names.empty() ? " (it takes no params)" : " (params: " + text::join(names) + ")"),
+                   L.at(pe.key_node));
+          }
+          if (missing && names_unknown(vars, L, pe.value)) {
+            unknown_params.insert(p->name);
+            return;
+          }
+          node.params.set(p->name, reader.read(*p, pe));
+          places[{node_index, p->name}] = L.at(pe);
+        });
       }
     }
     for (const ParamSpec& p : spec.params) {
-      if (node.params.has(p.name)) continue;
-      if (p.required)
-        L.fail("node " + text::in_quotes(node.id) + " (" + type + ") needs param " + text::in_quotes(p.name) +
-                   " (" + to_string(p.type) + (p.doc.empty() ? std::string() : ": " + p.doc) + ")",
-               where);
+      if (node.params.has(p.name) || unknown_params.count(p.name)) continue;
+      if (p.required) {
+        complete &= L.attempt([&] {
+          L.fail("node " + text::in_quotes(node.id) + " (" + spec.type + ") needs param " +
+                     text::in_quotes(p.name) + " (" + to_string(p.type) +
+                     (p.doc.empty() ? std::string() : ": " + p.doc) + ")",
+                 node.where);
+        });
+        continue;
+      }
       node.params.set(p.name, p.default_value);
     }
     index[node.id] = node_index;
+    makeable.push_back(complete && unknown_params.empty());
     g.nodes.push_back(std::move(node));
   }
-  if (g.nodes.empty()) L.fail("the graph has no nodes", L.at(nodes->key_node));
+  if (g.nodes.empty() && unreadable.empty()) L.fail("the graph has no nodes", L.at(nodes->key_node));
 
   auto spec_of = [&](std::size_t i) -> const NodeSpec& { return registry.find_node(g.nodes[i].type)->spec; };
   std::vector<std::string> ids;
   for (const NodeInstance& n : g.nodes) ids.push_back(n.id);
+  ids.insert(ids.end(), unreadable.begin(), unreadable.end());
 
-  // Connections.
+  // Connections. One touching an unreadable node is not checked, nor is its input's need of one.
+  std::set<std::string> unsure_inputs;
   if (const Entry* cs = Loader::find(head.top, "connections")) {
     if (!cs->value.IsNull() && !cs->value.IsSequence())
       L.fail("'connections' must be a list of {from: node.port, to: node.port}, got " +
@@ -739,62 +847,74 @@ Graph build(const YAML::Node& root, const std::string& file_name, const fs::path
     std::size_t k = 0;
     for (const YAML::Node& item : cs->value) {
       const std::string path = "connections[" + std::to_string(k++) + "]";
-      const SourceLocation where = L.at(item);
-      if (!item.IsMap())
-        L.fail(
-            text::in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
-            where);
-      const auto fields = L.entries(item, path);
-      L.check_keys(fields, path, kConnectionKeys);
-      Connection c;
-      c.where = where;
-      for (const char* end : {"from", "to"}) {
-        const Entry* f = Loader::find(fields, end);
-        if (!f) L.fail(text::in_quotes(path) + " has no '" + end + "'", where);
-        const std::string text = L.scalar(*f, text::in_quotes(path + "." + end), false);
-        const SourceLocation at = L.at(*f);
-        const std::size_t dot = text.find('.');
-        if (dot == std::string::npos || dot == 0 || dot + 1 == text.size())
-          L.fail(text::in_quotes(path + "." + end) + " must be 'node.port', got " + text::in_quotes(text),
-                 at);
-        PortRef ref{text.substr(0, dot), text.substr(dot + 1)};
-        auto found = index.find(ref.node);
-        if (found == index.end())
-          L.fail("unknown node " + text::in_quotes(ref.node) + " in " + path + "." + end +
-                     did_you_mean(ref.node, ids) + " (nodes: " + text::join(ids) + ")",
-                 at);
-        const NodeSpec& spec = spec_of(found->second);
-        const bool is_from = std::string(end) == "from";
-        const auto& ports = is_from ? spec.outputs : spec.inputs;
-        const auto& others = is_from ? spec.inputs : spec.outputs;
-        if (!(is_from ? spec.find_output(ref.port) : spec.find_input(ref.port))) {
-          if (std::any_of(others.begin(), others.end(),
-                          [&](const PortSpec& p) { return p.name == ref.port; }))
-            L.fail(ref.to_string() + " is an " + (is_from ? "input" : "output") + " of node " +
-                       text::in_quotes(ref.node) + " (" + spec.type +
-                       "); a connection goes from an output to an input",
+      L.attempt([&] {
+        const SourceLocation where = L.at(item);
+        if (!item.IsMap())
+          L.fail(
+              text::in_quotes(path) + " must be a map {from: node.port, to: node.port}, got " + kind_of(item),
+              where);
+        const auto fields = L.entries(item, path);
+        L.check_keys(fields, path, kConnectionKeys);
+        Connection c;
+        c.where = where;
+        bool unchecked = false;
+        for (const char* end : {"from", "to"}) {
+          const Entry* f = Loader::find(fields, end);
+          if (!f) L.fail(text::in_quotes(path) + " has no '" + end + "'", where);
+          const std::string text = L.scalar(*f, text::in_quotes(path + "." + end), false);
+          const SourceLocation at = L.at(*f);
+          const std::size_t dot = text.find('.');
+          if (dot == std::string::npos || dot == 0 || dot + 1 == text.size())
+            L.fail(text::in_quotes(path + "." + end) + " must be 'node.port', got " + text::in_quotes(text),
                    at);
-          L.fail("node " + text::in_quotes(ref.node) + " (" + spec.type + ") has no " +
-                     (is_from ? "output " : "input ") + text::in_quotes(ref.port) +
-                     did_you_mean(ref.port, port_names(ports)) + " (" + (is_from ? "outputs: " : "inputs: ") +
-                     port_list(ports) + ")",
-                 at);
+          PortRef ref{text.substr(0, dot), text.substr(dot + 1)};
+          const bool is_from = std::string(end) == "from";
+          if (unreadable.count(ref.node)) {
+            unchecked = true;
+            (is_from ? c.from : c.to) = std::move(ref);
+            continue;
+          }
+          auto found = index.find(ref.node);
+          if (found == index.end())
+            L.fail("unknown node " + text::in_quotes(ref.node) + " in " + path + "." + end +
+                       did_you_mean(ref.node, ids) + " (nodes: " + text::join(ids) + ")",
+                   at);
+          const NodeSpec& spec = spec_of(found->second);
+          const auto& ports = is_from ? spec.outputs : spec.inputs;
+          const auto& others = is_from ? spec.inputs : spec.outputs;
+          if (!(is_from ? spec.find_output(ref.port) : spec.find_input(ref.port))) {
+            if (std::any_of(others.begin(), others.end(),
+                            [&](const PortSpec& p) { return p.name == ref.port; }))
+              L.fail(ref.to_string() + " is an " + (is_from ? "input" : "output") + " of node " +
+                         text::in_quotes(ref.node) + " (" + spec.type +
+                         "); a connection goes from an output to an input",
+                     at);
+            L.fail("node " + text::in_quotes(ref.node) + " (" + spec.type + ") has no " +
+                       (is_from ? "output " : "input ") + text::in_quotes(ref.port) +
+                       did_you_mean(ref.port, port_names(ports)) + " (" +
+                       (is_from ? "outputs: " : "inputs: ") + port_list(ports) + ")",
+                   at);
+          }
+          (is_from ? c.from : c.to) = std::move(ref);
         }
-        (is_from ? c.from : c.to) = std::move(ref);
-      }
-      const PortSpec* out = spec_of(index[c.from.node]).find_output(c.from.port);
-      const PortSpec* in = spec_of(index[c.to.node]).find_input(c.to.port);
-      if (out->type != in->type)
-        L.fail(
-            c.to.to_string() + " expects " + in->type + ", got " + out->type + " from " + c.from.to_string(),
-            where);
-      for (const Connection& prior : g.connections)
-        if (prior.to.node == c.to.node && prior.to.port == c.to.port)
-          L.fail("input " + c.to.to_string() + " has two connections: from " + prior.from.to_string() + " (" +
-                     prior.where.to_string() + ") and from " + c.from.to_string() + " (" + where.to_string() +
-                     "); an input takes one",
+        if (unchecked) {
+          unsure_inputs.insert(c.to.to_string());
+          return;
+        }
+        const PortSpec* out = spec_of(index[c.from.node]).find_output(c.from.port);
+        const PortSpec* in = spec_of(index[c.to.node]).find_input(c.to.port);
+        if (out->type != in->type)
+          L.fail(c.to.to_string() + " expects " + in->type + ", got " + out->type + " from " +
+                     c.from.to_string(),
                  where);
-      g.connections.push_back(std::move(c));
+        for (const Connection& prior : g.connections)
+          if (prior.to.node == c.to.node && prior.to.port == c.to.port)
+            L.fail("input " + c.to.to_string() + " has two connections: from " + prior.from.to_string() +
+                       " (" + prior.where.to_string() + ") and from " + c.from.to_string() + " (" +
+                       where.to_string() + "); an input takes one",
+                   where);
+        g.connections.push_back(std::move(c));
+      });
     }
   }
 
@@ -805,16 +925,18 @@ Graph build(const YAML::Node& root, const std::string& file_name, const fs::path
       const bool connected = std::any_of(
           g.connections.begin(), g.connections.end(),
           [&](const Connection& c) { return c.to.node == g.nodes[i].id && c.to.port == in.name; });
-      if (connected) continue;
+      if (connected || unsure_inputs.count(g.nodes[i].id + "." + in.name)) continue;
       std::vector<std::string> candidates;
       for (std::size_t j = 0; j < g.nodes.size(); ++j)
         for (const PortSpec& out : spec_of(j).outputs)
           if (j != i && out.type == in.type) candidates.push_back(g.nodes[j].id + "." + out.name);
-      L.fail("required input " + g.nodes[i].id + "." + in.name + " (" + in.type + ") of node " +
-                 text::in_quotes(g.nodes[i].id) + " (" + g.nodes[i].type + ") is not connected" +
-                 (candidates.empty() ? std::string(" (no node of the graph outputs " + in.type + ")")
-                                     : " (outputs of that type: " + text::join(candidates) + ")"),
-             g.nodes[i].where);
+      L.attempt([&] {
+        L.fail("required input " + g.nodes[i].id + "." + in.name + " (" + in.type + ") of node " +
+                   text::in_quotes(g.nodes[i].id) + " (" + g.nodes[i].type + ") is not connected" +
+                   (candidates.empty() ? std::string(" (no node of the graph outputs " + in.type + ")")
+                                       : " (outputs of that type: " + text::join(candidates) + ")"),
+               g.nodes[i].where);
+      });
     }
   }
 
@@ -826,18 +948,22 @@ Graph build(const YAML::Node& root, const std::string& file_name, const fs::path
     SourceLocation where = g.nodes[cycle.front()].where;
     for (const Connection& c : g.connections)
       if (c.from.node == names[names.size() - 2] && c.to.node == names.back()) where = c.where;
-    L.fail("the graph has a cycle: " + text::join(names, " -> "), where);
+    L.attempt([&] { L.fail("the graph has a cycle: " + text::join(names, " -> "), where); });
   }
 
   check_paths(L, g, registry, places);
 
-  // Only a fully valid graph gets its nodes made.
-  for (NodeInstance& n : g.nodes) {
-    try {
-      n.node = registry.create_node(n.type, n.params);
-    } catch (const std::exception& e) {
-      L.fail("node " + text::in_quotes(n.id) + " (" + n.type + "): " + e.what(), n.where);
-    }
+  // Only nodes whose params all read get made (each checks its settings together).
+  for (std::size_t i = 0; i < g.nodes.size(); ++i) {
+    NodeInstance& n = g.nodes[i];
+    if (!makeable[i]) continue;
+    L.attempt([&] {
+      try {
+        n.node = registry.create_node(n.type, n.params);
+      } catch (const std::exception& e) {
+        L.fail("node " + text::in_quotes(n.id) + " (" + n.type + "): " + e.what(), n.where);
+      }
+    });
   }
   return g;
 }
@@ -873,15 +999,29 @@ std::vector<Variable> GraphDocument::variables() const {
   return vars.declared();
 }
 
-std::vector<PluginEntry> GraphDocument::plugins(const std::map<std::string, std::string>& overrides) const {
+std::vector<PluginEntry> GraphDocument::plugins(const std::map<std::string, std::string>& overrides,
+                                                bool allow_missing) const {
   Loader L(parsed_->file_name);
-  Variables vars(L);
+  std::vector<Variable> missing;
+  Variables vars(L, allow_missing ? &missing : nullptr);
   return read_head(L, vars, parsed_->root, overrides).plugins;
 }
 
 Graph GraphDocument::load(const Registry& registry,
                           const std::map<std::string, std::string>& overrides) const {
   return build(parsed_->root, parsed_->file_name, parsed_->file, registry, overrides);
+}
+
+GraphCheck GraphDocument::check(const Registry& registry,
+                                const std::map<std::string, std::string>& overrides) const {
+  GraphCheck result;
+  try {
+    result.graph = build(parsed_->root, parsed_->file_name, parsed_->file, registry, overrides,
+                         &result.problems, &result.needed);
+  } catch (const Error& e) {
+    result.problems.push_back(e);  // the file's head or its list of nodes: nothing after it can be read
+  }
+  return result;
 }
 
 std::vector<PluginEntry> read_graph_plugins(const fs::path& file,

@@ -11,6 +11,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "kg/motion/calibration.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace kg::io {
@@ -153,7 +154,47 @@ bool lengths_finite(const motion::Skeleton& skeleton, const motion::FrameMatrix&
   return values.allFinite();
 }
 
+// A frame number of a trim value: digits only, at most 9 of them (no overflow, no sign).
+bool parse_frame_number(const std::string& text, int& out) {
+  if (text.empty() || text.size() > 9) return false;
+  for (char c : text)
+    if (c < '0' || c > '9') return false;
+  out = std::stoi(text);
+  return true;
+}
+
+// FIRST..LAST or FIRST.. parsed; last = -1 for an open end. False when malformed.
+bool parse_trim(const std::string& trim, int& first, int& last) {
+  const std::size_t dots = trim.find("..");
+  if (dots == std::string::npos) return false;
+  const std::string a = trim.substr(0, dots), b = trim.substr(dots + 2);
+  if (!parse_frame_number(a, first)) return false;
+  last = -1;
+  if (!b.empty() && !parse_frame_number(b, last)) return false;
+  return last < 0 || last >= first;
+}
+
+const char* kTrimExpected = "auto, none, FIRST..LAST or FIRST.. (frame numbers from 0, FIRST <= LAST)";
+
+// Keeps rows [first, last] of the clip's values.
+void keep_frames(motion::Motion& m, int first, int last) {
+  motion::FrameMatrix kept = m.values.middleRows(first, last - first + 1);
+  m.values = std::move(kept);
+}
+
 }  // namespace
+
+FrameRange trim_range(const std::string& trim, int frames) {
+  if (trim == "auto" || trim == "none") return {0, frames - 1};
+  int first = 0, last = -1;
+  if (!parse_trim(trim, first, last))
+    throw std::invalid_argument("trim " + text::excerpt(trim) + ": expected " + kTrimExpected);
+  if (last < 0) last = frames - 1;
+  if (first >= frames || last >= frames)
+    throw std::invalid_argument("trim " + trim + ": the clip has " + std::to_string(frames) + " frames (0.." +
+                                std::to_string(frames - 1) + ")");
+  return {first, last};
+}
 
 double metres_per_unit(const std::string& units) {
   for (const NamedUnit& u : kUnits)
@@ -187,6 +228,9 @@ void ImportOptions::validate() const {
   require(up == "auto" || up == "y" || up == "z", o, "up", up, "auto, y or z");
   require(options::non_negative(fps), o, "fps", fps,
           ">= 0 and finite (frames per second; 0 keeps the file's)");
+  int first = 0, last = 0;
+  require(trim == "auto" || trim == "none" || parse_trim(trim, first, last), o, "trim", text::excerpt(trim),
+          kTrimExpected);
 }
 
 std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOptions& options,
@@ -313,6 +357,24 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
     m.fps = options.fps;
   } else {
     m.fps = file_fps;
+  }
+
+  // Calibration frames, judged on the clip in metres at its rate.
+  if (options.trim == "auto") {
+    const motion::CalibrationCut cut = motion::detect_calibration_frames(m);
+    if (cut.frames > 0) {
+      keep_frames(m, cut.frames, m.frame_count() - 1);
+      notes.push_back(prefix + "trim auto: " + cut.evidence + "; dropped (trim: none keeps them), " +
+                      std::to_string(m.frame_count()) + " frames left");
+    } else {
+      notes.push_back(prefix + "trim auto: " + cut.evidence);
+    }
+  } else if (options.trim != "none") {
+    const int frames = m.frame_count();
+    const FrameRange r = trim_range(options.trim, frames);
+    keep_frames(m, r.first, r.last);
+    notes.push_back(prefix + "trim " + options.trim + ": frames " + std::to_string(r.first) + ".." +
+                    std::to_string(r.last) + " kept of 0.." + std::to_string(frames - 1));
   }
   return notes;
 }

@@ -22,7 +22,13 @@ std::vector<graph::ParamSpec> import_option_params(const std::string& default_un
        .type = ParamType::Float,
        .default_value = 0.0,
        .doc = "frames per second overriding the file's (files lie); 0 keeps the file's",
-       .min = 0.0}};
+       .min = 0.0},
+      {.name = "trim",
+       .type = ParamType::String,
+       .default_value = std::string("auto"),
+       .doc =
+           "frames kept: auto (drops calibration frames, a T-pose or A-pose before the motion, and says so), "
+           "none, FIRST..LAST or FIRST.. (frame numbers of the file from 0, inclusive)"}};
 }
 
 ImportOptions import_options_from(const graph::Params& params) {
@@ -30,6 +36,7 @@ ImportOptions import_options_from(const graph::Params& params) {
   o.units = params.get<std::string>("units");
   o.up = params.get<std::string>("up");
   o.fps = params.get<double>("fps");
+  o.trim = params.get<std::string>("trim");
   o.validate();  // node factories call this: a bad setting fails when the graph loads
   return o;
 }

@@ -93,7 +93,7 @@ TEST_CASE("--help and --version", "[cli]") {
   CHECK(kinegraph({"run", "--help"}).code == 0);  // help wins wherever it is
   const Result v = kinegraph({"--version"});
   CHECK(v.code == 0);
-  CHECK_THAT(v.out, StartsWith("kinegraph ") && Contains("plugin ABI 4"));
+  CHECK_THAT(v.out, StartsWith("kinegraph ") && Contains("plugin ABI 5"));
 }
 
 TEST_CASE("usage errors exit 2 with a message on stderr", "[cli]") {
@@ -275,7 +275,6 @@ TEST_CASE("invalid graphs exit 3 with file:line", "[cli]") {
        {},
        "3:"},
       {"unsupported version", "version: 7\nnodes:\n  a: {type: test.constant}\n", {}, "1:"},
-      {"required variable missing", sum, {}, ""},
       {"undeclared --set", sum, {"--set", "out=x", "--set", "nosuch=1"}, ""},
       {"not YAML", "version: 1\nnodes: [unclosed\n", {}, ""},
   };
@@ -309,6 +308,70 @@ TEST_CASE("invalid graphs exit 3 with file:line", "[cli]") {
     const Result r = kinegraph({"validate", graph.string(), "--set", "out=x"});
     CHECK(r.code == 3);
     CHECK_THAT(r.err, Contains("sum.yaml:7:") && Contains("test.constant"));
+  }
+}
+
+TEST_CASE("validate reports every problem, the values a run needs, and missing inputs", "[cli]") {
+  TempDir dir;
+  SECTION("a graph given no value for a required variable is valid, and says what a run needs") {
+    const fs::path graph = dir.write("sum.yaml", kSumGraph);
+    const Result v = kinegraph(with_plugins({"validate", graph.string()}));
+    INFO(show(v));
+    CHECK(v.code == 0);
+    CHECK_THAT(v.out, Contains("sum.yaml: valid: 4 nodes, 3 connections") &&
+                          Contains("a run needs: --set out=...") && Contains("out: where the sum goes"));
+    const Result r = kinegraph(with_plugins({"run", graph.string()}));
+    CHECK(r.code == 3);  // run still refuses it
+    CHECK_THAT(r.err, Contains("variable 'out' is required and has no value"));
+  }
+  SECTION("the problems of the values given are still found") {
+    const fs::path graph = dir.write("sum.yaml", kSumGraph);
+    const Result v = kinegraph(with_plugins({"validate", graph.string(), "--set", "b=three"}));
+    INFO(show(v));
+    CHECK(v.code == 3);
+    CHECK_THAT(v.err, Contains("sum.yaml:8:") && Contains("three"));
+  }
+  SECTION("three problems in three places, each with its line") {
+    const fs::path graph = dir.write("bad.yaml",
+                                     "version: 1\n"                                      // 1
+                                     "nodes:\n"                                          // 2
+                                     "  a: {type: test.constant, params: {value: x}}\n"  // 3
+                                     "  b: {type: test.constnat}\n"                      // 4
+                                     "  c: {type: test.constant, params: {valeu: 1}}\n"  // 5
+                                     "  sum: {type: test.add}\n"                         // 6
+                                     "connections:\n"                                    // 7
+                                     "  - {from: a.value, to: sum.a}\n"                  // 8
+                                     "  - {from: b.value, to: sum.b}\n"                  // 9
+                                     "  - {from: c.nosuch, to: sum.b}\n");               // 10
+    const Result v = kinegraph(with_plugins({"validate", graph.string()}));
+    INFO(show(v));
+    CHECK(v.code == 3);
+    CHECK_THAT(v.err, Contains("bad.yaml:3:") && Contains("bad.yaml:4:") && Contains("bad.yaml:5:") &&
+                          Contains("bad.yaml:10:") && Contains("invalid: 4 problems"));
+    CHECK_THAT(v.err, !Contains("bad.yaml:9:"));  // b's type is unknown: its connection is not judged
+    CHECK(v.out.empty());
+    const Result r = kinegraph(with_plugins({"run", graph.string()}));
+    CHECK(r.code == 3);  // run stops at the first
+    CHECK_THAT(r.err, Contains("bad.yaml:3:") && !Contains("bad.yaml:4:"));
+  }
+  SECTION("an input path given must exist, unless the graph writes it") {
+    const fs::path graph = dir.write("copy.yaml",
+                                     "version: 1\n"
+                                     "variables:\n"
+                                     "  input: {required: true}\n"
+                                     "nodes:\n"
+                                     "  read: {type: test.read_number, params: {path: \"${input}\"}}\n");
+    const Result absent =
+        kinegraph(with_plugins({"validate", graph.string(), "--set", "input=/nonexistent.bvh"}));
+    INFO(show(absent));
+    CHECK(absent.code == 3);
+    CHECK_THAT(absent.err, Contains("copy.yaml:5:") && Contains("'/nonexistent.bvh', which does not exist"));
+    const fs::path present = dir.write("present.txt", "1");
+    CHECK(kinegraph(with_plugins({"validate", graph.string(), "--set", "input=" + present.string()})).code ==
+          0);
+    const Result unknown = kinegraph(with_plugins({"validate", graph.string()}));
+    CHECK(unknown.code == 0);
+    CHECK_THAT(unknown.out, Contains("a run needs: --set input=..."));
   }
 }
 
@@ -346,7 +409,7 @@ TEST_CASE("nodes: text and --json", "[cli]") {
   INFO(show(j));
   REQUIRE(j.code == 0);
   const YAML::Node json = YAML::Load(j.out);
-  CHECK(json["plugin_abi"].as<int>() == 4);
+  CHECK(json["plugin_abi"].as<int>() == 5);
   REQUIRE(json["plugins"].size() >= 2);
   CHECK(
       json["plugins"][0]["path"].as<std::string>() ==
@@ -395,7 +458,7 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
     CHECK(r.code == 0);
     CHECK(read_file(out) == "5\n");
     for (const char* message :
-         {"ABI version 999, this host needs 4", "no kg_plugin_entry symbol", "entry threw",
+         {"ABI version 999, this host needs 5", "no kg_plugin_entry symbol", "entry threw",
           "no kg_plugin_abi_version symbol", "is not a Boost.DLL alias", "a library this one depends on",
           "node type test.constant already registered by"}) {
       CHECK_THAT(r.err, Contains("kinegraph: warning: ") && Contains(message));
@@ -489,7 +552,7 @@ TEST_CASE("plugins: search order, bad plugins are warnings, graph entries", "[cl
     const Result r = kinegraph(with_plugins({"run", g.string(), "--set", "out=" + out.string()}));
     INFO(show(r));
     CHECK(r.code == 4);
-    CHECK_THAT(r.err, Contains("ABI version 999, this host needs 4"));
+    CHECK_THAT(r.err, Contains("ABI version 999, this host needs 5"));
   }
 }
 

@@ -431,9 +431,9 @@ TEST_CASE("asf/amc 16_15 and MotionBuilder's 16_15.bvh give the same joint traje
   const fs::path asf = kAsfDir / "16.asf", amc = kAsfDir / "16_15.amc",
                  bvh = kData / "bvh_motionbuilder" / "16_15.bvh";
   if (!have({asf, amc, bvh})) return;
-  const auto ours =
-      kg::io::import_asf_amc(asf.string(), amc.string(), {.units = "auto", .up = "y", .fps = 0});
-  const auto theirs = kg::io::import_bvh(bvh, {.units = "cm", .up = "y", .fps = 0});
+  const auto ours = kg::io::import_asf_amc(asf.string(), amc.string(),
+                                           {.units = "auto", .up = "y", .fps = 0, .trim = "none"});
+  const auto theirs = kg::io::import_bvh(bvh, {.units = "cm", .up = "y", .fps = 0, .trim = "none"});
   const Motion& a = ours.motion;
   const Motion& b = theirs.motion;
   REQUIRE(a.frame_count() == 471);
@@ -500,8 +500,8 @@ TEST_CASE("asf/amc vs the Daz BVHs: frame counts and durations agree", "[io][asf
                    bvh = kData / "bvh_daz" / (std::string(p.stem) + ".bvh");
     if (!have({asf, amc, bvh})) return;
     INFO(p.stem);
-    const auto a = kg::io::import_asf_amc(asf.string(), amc.string(), {});
-    const auto b = kg::io::import_bvh(bvh, {});
+    const auto a = kg::io::import_asf_amc(asf.string(), amc.string(), {.trim = "none"});
+    const auto b = kg::io::import_bvh(bvh, {.trim = "none"});
     CHECK(a.motion.frame_count() == p.amc_frames);
     // cgspeed's Daz files prepend one synthetic T-pose frame.
     CHECK(b.motion.frame_count() == p.amc_frames + 1);
@@ -509,13 +509,16 @@ TEST_CASE("asf/amc vs the Daz BVHs: frame counts and durations agree", "[io][asf
     const double daz_duration = (b.motion.frame_count() - 2) / b.motion.fps;
     CHECK(a.motion.duration() == Approx(daz_duration).margin(0.5 / 120));
     CHECK(a.motion.fps == Approx(b.motion.fps).epsilon(1e-5));
+    // trim auto drops that frame, and the curve MotionBuilder drew out of it (frames 1..4).
+    const auto trimmed = kg::io::import_bvh(bvh, {});
+    CHECK(trimmed.motion.frame_count() == p.amc_frames + 1 - 5);
   }
 }
 
 TEST_CASE("asf/amc import: units, fps and notes", "[io][asf][data]") {
   const fs::path asf = kAsfDir / "16.asf", amc = kAsfDir / "16_15.amc";
   if (!have({asf, amc})) return;
-  const auto def = kg::io::import_asf_amc(asf.string(), amc.string(), {});
+  const auto def = kg::io::import_asf_amc(asf.string(), amc.string(), {.trim = "none"});
   CHECK(def.motion.fps == 120.0);
   CHECK(contains(def.notes, "no frame rate"));
   CHECK(contains(def.notes, "declares asf"));
@@ -525,7 +528,8 @@ TEST_CASE("asf/amc import: units, fps and notes", "[io][asf][data]") {
   const auto& s = *def.motion.skeleton;
   CHECK(s.joint(s.find_joint("rtibia")).offset.norm() == Approx(0.402124).epsilon(1e-5));
 
-  const auto cm = kg::io::import_asf_amc(asf.string(), amc.string(), {.units = "cm", .up = "y", .fps = 30});
+  const auto cm = kg::io::import_asf_amc(asf.string(), amc.string(),
+                                         {.units = "cm", .up = "y", .fps = 30, .trim = "none"});
   CHECK(cm.motion.fps == 30.0);
   CHECK_FALSE(contains(cm.notes, "no frame rate"));
   CHECK(cm.motion.skeleton->source_unit_metres == 0.01);
@@ -538,7 +542,7 @@ TEST_CASE("asf/amc import: units, fps and notes", "[io][asf][data]") {
 TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][nodes]") {
   const auto& asf_type = node_type("io.import_asf_amc");
   const auto& any_type = node_type("io.import_motion");
-  for (const char* p : {"skeleton", "path", "units", "up", "fps"}) {
+  for (const char* p : {"skeleton", "path", "units", "up", "fps", "trim"}) {
     CHECK(asf_type.spec.find_param(p) != nullptr);
     CHECK(any_type.spec.find_param(p) != nullptr);
   }
@@ -551,8 +555,9 @@ TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][no
                  bvh = kData / "bvh_motionbuilder" / "16_15.bvh";
   if (!have({asf, amc, bvh})) return;
   {
-    const NodeContext ctx =
-        run_node(asf_type, params_for(asf_type.spec, {{"skeleton", asf.string()}, {"path", amc.string()}}));
+    const NodeContext ctx = run_node(asf_type, params_for(asf_type.spec, {{"skeleton", asf.string()},
+                                                                          {"path", amc.string()},
+                                                                          {"trim", std::string("none")}}));
     const auto& m = ctx.outputs.at("motion").get<Motion>();
     CHECK(m.frame_count() == 471);
     CHECK(ctx.outputs.at("skeleton").get_shared<kg::motion::Skeleton>() == m.skeleton);
@@ -564,14 +569,17 @@ TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][no
   {  // the skeleton guessed from the subject prefix, and said so
     const NodeContext ctx =
         run_node(registry, "io.import_motion", params_for(any_type.spec, {{"path", amc.string()}}));
-    CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
+    // trim auto: the AMC's first two frames hold the left arm's "0 0 0" placeholder.
+    CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 469);
+    CHECK(ctx.logged("frames 0..1 are calibration"));
     CHECK(ctx.logged("16.asf"));
     CHECK(ctx.logged("skeleton not given"));
   }
   {  // a .bvh dispatches to the BVH reader
-    const NodeContext ctx =
-        run_node(registry, "io.import_motion",
-                 params_for(any_type.spec, {{"path", bvh.string()}, {"up", std::string("y")}}));
+    const NodeContext ctx = run_node(
+        registry, "io.import_motion",
+        params_for(any_type.spec,
+                   {{"path", bvh.string()}, {"up", std::string("y")}, {"trim", std::string("none")}}));
     CHECK(ctx.outputs.at("motion").get<Motion>().skeleton->find_joint("lhipjoint") < 0);
     CHECK(ctx.outputs.at("motion").get<Motion>().frame_count() == 471);
   }

@@ -85,7 +85,7 @@ TEST_CASE("import options: unit factors, names, params") {
   CHECK(kg::io::unit_name(1.0 / 128) == "0.0078125 m");
 
   auto params = kg::io::import_option_params("asf");
-  REQUIRE(params.size() == 3);
+  REQUIRE(params.size() == 4);
   CHECK(params[0].name == "units");
   CHECK(params[0].type == kg::graph::ParamType::Enum);
   CHECK(std::get<std::string>(params[0].default_value) == "asf");
@@ -96,13 +96,17 @@ TEST_CASE("import options: unit factors, names, params") {
   CHECK(params[2].type == kg::graph::ParamType::Float);
   CHECK(std::get<double>(params[2].default_value) == 0.0);
   CHECK(params[2].min == 0.0);
+  CHECK(params[3].name == "trim");
+  CHECK(std::get<std::string>(params[3].default_value) == "auto");
   CHECK_THROWS_AS(kg::io::import_option_params("furlong"), std::invalid_argument);
 
-  kg::graph::Params p({{"units", std::string("cm")}, {"up", std::string("z")}, {"fps", 120.0}});
+  kg::graph::Params p(
+      {{"units", std::string("cm")}, {"up", std::string("z")}, {"fps", 120.0}, {"trim", std::string("3..")}});
   ImportOptions o = kg::io::import_options_from(p);
   CHECK(o.units == "cm");
   CHECK(o.up == "z");
   CHECK(o.fps == 120.0);
+  CHECK(o.trim == "3..");
 }
 
 TEST_CASE("import options: bad options are refused") {
@@ -223,7 +227,7 @@ TEST_CASE("import options: 16_15.bvh's root stands at 0.97 m, not the doubled 1.
     WARN("skipped: cmu/bvh_motionbuilder/16_15.bvh not found");
     return;
   }
-  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
+  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {.trim = "none"});
   auto points = world_points(in.motion, 0);
   CHECK(points[0].y() == Approx(0.97422).margin(1e-9));
   CHECK(points[0].x() == Approx(0.06939).margin(1e-9));

@@ -76,7 +76,7 @@ TEST_CASE("bvh nodes: import, report, export atomically, import again") {
   CHECK(std::get<double>(ctx.figures.at("seconds")) == Approx(2.0 / 60));
   CHECK(std::get<std::string>(ctx.figures.at("units")) == "cm");
   CHECK(std::get<std::string>(ctx.figures.at("up")) == "y");
-  REQUIRE(ctx.logs.size() == 3);  // up, units, fps
+  REQUIRE(ctx.logs.size() == 4);  // up, units, fps, trim
   CHECK(ctx.logs[1].find("units auto: standing height 170 file units, taken as cm (1.70 m)") !=
         std::string::npos);
   CHECK(std::get<std::string>(ctx.figures.at("notes")).find("taken as cm") != std::string::npos);

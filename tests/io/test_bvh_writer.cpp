@@ -140,7 +140,7 @@ TEST_CASE("bvh writer: every file of ../shared/data round-trips exactly to the p
 
     // Imported (metres, maybe Z-up) and written back in the source unit: the same text as the
     // file-unit clip, so scaling is undone and file_to_world is not written.
-    kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
+    kg::io::ImportedMotion in = kg::io::import_bvh(*path, {.trim = "none"});
     CHECK(write_bvh_string(in.motion) == write_bvh_string(clip.motion));
   }
   if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
@@ -152,7 +152,7 @@ TEST_CASE("bvh writer: other units scale lengths only") {
     WARN("skipped: cmu/bvh_motionbuilder/16_15.bvh not found");
     return;
   }
-  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {});
+  kg::io::ImportedMotion in = kg::io::import_bvh(*path, {.trim = "none"});
   REQUIRE(in.motion.skeleton->source_unit_metres == 0.01);
   const std::string m = write_bvh_string(in.motion, {.units = "m", .precision = 8});
   CHECK(m.find("ROOT root\n{\n\tOFFSET 0.06939 0.97422 -1.51953\n") != std::string::npos);

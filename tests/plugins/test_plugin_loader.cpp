@@ -82,7 +82,7 @@ TEST_CASE("bad plugins are refused with a clear message, the registry unchanged"
     std::string message;
   };
   const Case cases[] = {
-      {"abi_999", "ABI version 999, this host needs 4"},
+      {"abi_999", "ABI version 999, this host needs 5"},
       {"no_entry", "no kg_plugin_entry symbol: not a Kinegraph plugin"},
       {"no_abi", "no kg_plugin_abi_version symbol: not a Kinegraph plugin"},
       {"entry_throws", "entry threw: deliberately thrown by the entry"},

@@ -33,7 +33,8 @@ namespace kg::graph {
 
 // 3: typed extensions (extension.hpp) and NodeType::create_with_registry.
 // 4: NodeSpec::side_effects and PortSpec::kept_on_failure (the executor's caching and sinks).
-inline constexpr std::uint32_t kPluginAbiVersion = 4;
+// 5: kg::io::ImportOptions::trim (a MotionFormat reader's options changed layout).
+inline constexpr std::uint32_t kPluginAbiVersion = 5;
 
 struct PluginRecord {
   std::string id;       // unique, e.g. "kg.lowpass"

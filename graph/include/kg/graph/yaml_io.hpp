@@ -42,6 +42,15 @@ struct PluginEntry {
   SourceLocation where;
 };
 
+// What `kinegraph validate` finds: every problem of the graph, and the required variables a run
+// would need. A required variable given no value stands for an unknown value: the params it
+// reaches are not checked, and the nodes holding them are not made.
+struct GraphCheck {
+  Graph graph;                  // as far as it could be read; runnable only when both lists are empty
+  std::vector<Error> problems;  // in the order found (file order within each kind of check)
+  std::vector<Variable> needed;
+};
+
 // A graph file read and parsed once (YAML, strictly: no duplicate key, bounded alias growth), for
 // callers that need its plugins or variables before the graph: the CLI loads the plugins that
 // provide its node types, and batch and tests/fuzz/fuzz_graph.cpp give values to its variables.
@@ -54,8 +63,13 @@ class GraphDocument {
 
   // As read_graph_variables, read_graph_plugins and load_graph below, without parsing again.
   std::vector<Variable> variables() const;
-  std::vector<PluginEntry> plugins(const std::map<std::string, std::string>& overrides) const;
+  // With `allow_missing`, an entry naming a required variable that has no value is left out.
+  std::vector<PluginEntry> plugins(const std::map<std::string, std::string>& overrides,
+                                   bool allow_missing = false) const;
   Graph load(const Registry& registry, const std::map<std::string, std::string>& overrides = {}) const;
+  // As load, collecting every problem rather than throwing at the first; also checks that each
+  // input path given exists or is written by the graph (a run finds that when the node runs).
+  GraphCheck check(const Registry& registry, const std::map<std::string, std::string>& overrides = {}) const;
 
  private:
   struct Parsed;

@@ -25,6 +25,10 @@ struct ImportOptions {
   std::string up = "auto";
   // Frames per second overriding the file's header; 0 keeps the file's.
   double fps = 0;
+  // auto | none | FIRST..LAST | FIRST.. (frame numbers of the file, from 0, inclusive): the
+  // frames kept. auto drops calibration frames (a T-pose or A-pose before the motion starts:
+  // motion::detect_calibration_frames, kg/motion/calibration.hpp) and says so either way.
+  std::string trim = "auto";
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
@@ -39,6 +43,14 @@ struct ImportedMotion {
   // override it. 0 when the file states none (AMC).
   double file_frame_time = 0;
 };
+
+// The frames `trim` keeps of a clip of `frames` frames: [first, last], inclusive; auto and none
+// give [0, frames-1] (auto's cut is made by apply_import_options). Throws std::invalid_argument
+// for a malformed value or one outside the clip.
+struct FrameRange {
+  int first = 0, last = -1;
+};
+FrameRange trim_range(const std::string& trim, int frames);
 
 // Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.
 double metres_per_unit(const std::string& units);
@@ -63,6 +75,10 @@ bool known_unit(const std::string& units);
 //     figure is what a viewer shows; a median, because a single pose (arms reaching forward)
 //     can be as deep as it is tall.
 //   - fps: options.fps when > 0, else file_fps (which must then be > 0).
+//   - trim (last, on the converted clip): auto drops the frames detect_calibration_frames
+//     finds; FIRST..LAST keeps those frames (LAST past the clip is an error naming the clip's
+//     frame count); none keeps all. Frame numbers in later files (constraints, contacts) count
+//     from the first frame kept.
 // Channel values other than position channels are not touched: file_to_world sits above the
 // roots, so channels stay in file coordinates and exporters write them back unchanged.
 // Returns notes for the user, each starting with "file_name: ", saying what auto chose (and
