@@ -92,8 +92,9 @@ CalibrationCut detect_calibration_frames(const Motion& motion) {
   for (int f = 1; f < run_start; ++f)
     held = std::max(held, shape_distance(shapes[static_cast<std::size_t>(f)], shapes[0]));
 
-  const std::string peak_text = "the first half's fastest change of shape (into frame " + std::to_string(peak) +
-                                ", " + fmt("%.3g", at(peak)) + " m/s RMS about the centroid)";
+  const std::string peak_text = "the first half's fastest change of shape (into frame " +
+                                std::to_string(peak) + ", " + fmt("%.3g", at(peak)) +
+                                " m/s RMS about the centroid)";
   std::string failed;
   if (!(at(peak) > kCalibrationSpeed))
     failed = "is not over " + fmt("%g", kCalibrationSpeed) + " m/s";

@@ -24,6 +24,10 @@ const char* to_string(TorqueTarget target) {
   return "?";
 }
 
+const char* to_string(FlightTiming timing) {
+  return timing == FlightTiming::Hold ? "hold" : "free";
+}
+
 namespace {
 
 std::string fixed(double x, int digits = 3) {
@@ -73,6 +77,85 @@ std::vector<Pin> flight_at_source_speed(const Hulls& hulls, double fps, double d
   return playback;
 }
 
+// Runs of two or more consecutive flight frames, as [first, last] source frames.
+std::vector<std::pair<int, int>> flight_runs(const Hulls& hulls) {
+  std::vector<std::pair<int, int>> runs;
+  const int frames = static_cast<int>(hulls.frames.size());
+  for (int f = 0; f < frames;) {
+    if (hulls.frames[static_cast<std::size_t>(f)].status != HullStatus::Flight) {
+      ++f;
+      continue;
+    }
+    int last = f;
+    while (last + 1 < frames && hulls.frames[static_cast<std::size_t>(last + 1)].status == HullStatus::Flight)
+      ++last;
+    if (last > f) runs.push_back({f, last});
+    f = last + 1;
+  }
+  return runs;
+}
+
+// The playback the held solve starts from: constant speed between the ends, the pins and each
+// hold's fixed controls (which it plays on the hold's line, so they need no correction).
+std::vector<Pin> held_start(const TimeWarp& layout, const std::vector<Hold>& holds,
+                            const std::vector<Pin>& pins) {
+  std::vector<Pin> knots = pins;
+  const double h = layout.knot_spacing();
+  for (const Hold& hold : holds) {
+    const auto [first, last] = held_segments(hold, layout.duration, layout.segments());
+    for (const double t : {(first - 1) * h, first * h, last * h, (last + 1) * h})
+      knots.push_back({hold.source_start + hold.speed * (t - hold.output_start), t});
+  }
+  std::sort(knots.begin(), knots.end(),
+            [](const Pin& a, const Pin& b) { return a.output_time < b.output_time; });
+  std::vector<Pin> playback{{0, 0}};
+  for (const Pin& k : knots)
+    if (k.output_time > playback.back().output_time && k.output_time < layout.duration &&
+        k.source_time > playback.back().source_time && k.source_time < layout.source_duration)
+      playback.push_back(k);
+  playback.push_back({layout.source_duration, layout.duration});
+  return playback;
+}
+
+// FlightTiming::Hold: each flight held at the speed the hulls' gravity gives, its middle where
+// `free` plays it. Empty, with `note` saying why, when no flight can be held so.
+std::vector<Hold> flight_holds(const Hulls& hulls, double fps, const TimeWarp& free, double& speed,
+                               std::string& note) {
+  const auto runs = flight_runs(hulls);
+  if (runs.empty()) {
+    note = "no flight to hold (no two consecutive frames without contact)";
+    return {};
+  }
+  const Eigen::Vector3d g = hulls.gravity;
+  if (!(g.y() < 0) || std::hypot(g.x(), g.z()) > 1e-9 * g.norm()) {
+    note = "flights not held: gravity (" + fixed(g.x()) + ", " + fixed(g.y()) + ", " + fixed(g.z()) +
+           ") m/s^2 is not straight down, so no constant playback is ballistic (they are weighed instead)";
+    return {};
+  }
+  speed = std::sqrt(g.norm() / kCaptureGravity);
+  std::vector<Hold> holds;
+  double total = 0, end = 0;
+  for (const auto& [first, last] : runs) {
+    const double source_start = first / fps, length = (last - first) / fps / speed;
+    total += length;
+    // A flight the clip starts or ends in starts or ends the output: the ends are kept.
+    const int final_frame = static_cast<int>(hulls.frames.size()) - 1;
+    const double middle = output_time_of(free, (first + last) / (2 * fps));
+    const double placed = first == 0            ? 0.0
+                          : last == final_frame ? free.duration - length
+                                                : middle - length / 2;
+    const double start = std::clamp(std::max(placed, end), 0.0, free.duration - length);
+    holds.push_back({source_start, start, length, speed});
+    end = start + length;
+  }
+  if (total >= free.duration) {
+    note = "flights not held: at the speed gravity gives (" + fixed(speed) + "x) they alone last " +
+           fixed(total) + " s, not less than the " + fixed(free.duration) + " s requested";
+    return {};
+  }
+  return holds;
+}
+
 }  // namespace
 
 void ClipRetimeOptions::validate() const {
@@ -90,6 +173,81 @@ void ClipRetimeOptions::validate() const {
     require(solve.samples_per_frame >= 1 && solve.samples_per_frame <= kMaxSamplesPerFrame, "RetimeOptions",
             "samples_per_frame", solve.samples_per_frame, "1 to " + std::to_string(kMaxSamplesPerFrame));
 }
+
+namespace {
+
+// The holds the warp of `options` (its knot spacing, duration, pins) can meet together: the
+// longest flights first, each kept when the warp can still start meeting it and those before.
+std::vector<Hold> compatible_holds(std::vector<Hold> holds, double source_duration,
+                                   const RetimeOptions& options, std::string& dropped) {
+  std::stable_sort(holds.begin(), holds.end(),
+                   [](const Hold& a, const Hold& b) { return a.length > b.length; });
+  const int segments = warp_segments(options);
+  const TimeWarp layout = TimeWarp::uniform(source_duration, options.duration, segments);
+  std::vector<Hold> kept;
+  dropped.clear();
+  for (const Hold& hold : holds) {
+    std::vector<Hold> trial = kept;
+    trial.push_back(hold);
+    std::sort(trial.begin(), trial.end(),
+              [](const Hold& a, const Hold& b) { return a.output_start < b.output_start; });
+    try {
+      initial_warp(source_duration, options.duration, segments, options.pins,
+                   held_start(layout, trial, options.pins), trial);
+      kept = std::move(trial);
+    } catch (const std::invalid_argument&) {
+      dropped += (dropped.empty() ? "" : ", ") + fixed(hold.source_start) + " s";
+    }
+  }
+  return kept;
+}
+
+// Solves again with the flights held (flight_holds), placed where out.solve's free solution plays
+// them, and keeps the held solution in out.solve. Flights the spline cannot hold together (near
+// an end, a pin or each other) are held on a knot spacing halved, twice at most, or left free.
+void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps, const RetimeOptions& solve,
+                  ClipRetime& out) {
+  double speed = 0;
+  const std::vector<Hold> all = flight_holds(hulls, fps, out.solve.warp, speed, out.flight_note);
+  if (all.empty()) return;
+  RetimeOptions held = solve, trial = solve;
+  std::string dropped, trial_dropped;
+  for (int attempt = 0; attempt < 3; ++attempt, trial.knot_spacing /= 2) {
+    trial.holds = compatible_holds(all, objective.source_duration(), trial, trial_dropped);
+    if (trial.holds.size() > held.holds.size()) held = trial, dropped = trial_dropped;
+    if (held.holds.size() == all.size()) break;
+  }
+  if (held.holds.empty()) {
+    out.flight_note = "flights not held: the spline of " + fixed(solve.knot_spacing) +
+                      " s knots cannot hold them, even halved twice (they are weighed instead)";
+    return;
+  }
+  held.start = held_start(TimeWarp::uniform(objective.source_duration(), held.duration, warp_segments(held)),
+                          held.holds, held.pins);
+  RetimeResult result = retime(objective, held);
+  result.iterations += out.solve.iterations;
+  result.evaluations += out.solve.evaluations;
+  result.seconds += out.solve.seconds;
+  out.solve = std::move(result);
+  out.flights_held = static_cast<int>(held.holds.size());
+  out.held_speed = speed;
+  double held_time = 0;
+  for (const Hold& h : held.holds) held_time += h.length;
+  out.flight_note =
+      std::to_string(held.holds.size()) + (held.holds.size() == 1 ? " flight" : " flights") + " held (" +
+      fixed(held_time) + " s of output at " + fixed(speed) +
+      "x source speed, p'' = 0: ballistic under the hulls' gravity, placed where the free solve "
+      "played " +
+      (held.holds.size() == 1 ? "it" : "them") + ")";
+  if (held.knot_spacing != solve.knot_spacing)
+    out.flight_note += ", knot spacing " + fixed(held.knot_spacing) + " s";
+  if (!dropped.empty())
+    out.flight_note += "; the flights from source " + dropped +
+                       " are not held (with the longer flights, the ends and the pins held too, the spline "
+                       "cannot play them increasingly at these knots)";
+}
+
+}  // namespace
 
 ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques, double fps,
                        const ClipRetimeOptions& options, const motion::Skeleton& skeleton,
@@ -197,9 +355,11 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
         out.solve.seconds = other.seconds;
       }
     }
+    if (options.flights == FlightTiming::Hold) hold_flights(objective, hulls, fps, options.solve, out);
     out.warp = out.solve.warp;
     message << (out.solve.converged ? "converged" : "did not converge") << " in " << out.solve.iterations
             << " iterations" << starts << " (" << out.solve.message << "). ";
+    if (!out.flight_note.empty()) message << out.flight_note << ". ";
   }
 
   // Parts of the objective and the share of output frames inside their hulls.
@@ -241,16 +401,28 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
             << " frames without a feasible polytope at their closest point (flight: root residual within "
             << fixed(100 * kFlightTolerance, 0) << "% of the weight of its least)";
   message << ".";
+  // What could not be met, in one plain sentence ahead of the details.
+  std::string headline;
   if (!out.feasible && options.mode == RetimeMode::Optimise) {
     out.shortest = time_optimal_playback();
+    const std::string outside =
+        fixed(100 * (1 - out.share_inside), 0) + "% of the output frames with contact";
     if (out.shortest->feasible && options.solve.duration < out.shortest->duration)
-      message << " The requested duration " << fixed(options.solve.duration)
-              << " s is shorter than any feasible "
-              << "playback: the shortest lasts " << fixed(out.shortest->duration) << " s.";
+      headline = "Not physical: the requested " + fixed(options.solve.duration) +
+                 " s is shorter than any feasible playback: the shortest lasts " +
+                 fixed(out.shortest->duration) + " s, so " + outside +
+                 " play outside what their contacts allow (the closest playback is written). ";
     else if (!out.shortest->feasible)
-      message << " No timing keeps every frame inside its hull: " << out.shortest->message << ".";
+      headline = "Not physical: no playback keeps every frame of this clip inside its hull (" +
+                 out.shortest->message + "), so " + outside +
+                 " play outside what their contacts allow (the closest playback is written). ";
+    else
+      headline = "Not physical: the playback of " + fixed(options.solve.duration) + " s found leaves " +
+                 outside +
+                 " outside what their contacts allow (it is written; the shortest physical playback lasts " +
+                 fixed(out.shortest->duration) + " s). ";
   }
-  out.message = message.str();
+  out.message = headline + message.str();
   return out;
 }
 

@@ -317,6 +317,7 @@ class RetimeNode final : public graph::Node {
     options_.alpha = p.get<double>("alpha");
     options_.beta = p.get<double>("beta");
     options_.flight_weight = p.get<double>("flight_weight");
+    options_.flights = p.get<std::string>("flights") == "free" ? FlightTiming::Free : FlightTiming::Hold;
     options_.solve.knot_spacing = options_.time_optimal.knot_spacing = p.get<double>("knot_spacing");
     options_.inside_tolerance = p.get<double>("inside_tolerance");
     if (duration_ > 0 && duration_ / options_.solve.knot_spacing > kMaxSegments)
@@ -363,6 +364,7 @@ class RetimeNode final : public graph::Node {
     ctx.report("torque_scale", r.torque_scale);
     ctx.report("share_inside", r.share_inside);
     ctx.report("share_at_point", r.share_at_point);
+    ctx.report("flights_held", static_cast<std::int64_t>(r.flights_held));
     if (r.shortest && r.shortest->feasible) ctx.report("shortest_duration", r.shortest->duration);
     ctx.report("message", r.message);
     // Time-optimal with no feasible timing, or a strict request out of reach: the report says why
@@ -377,6 +379,9 @@ class RetimeNode final : public graph::Node {
       w.field("clip", motion.name);
       w.field("objective", to_string(options.target));
       w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
+      w.field("flights", to_string(options.flights));
+      w.field("flights_held", r.flights_held);
+      if (r.flights_held > 0) w.field("held_speed", r.held_speed);
       w.field("source_duration", motion.duration());
       w.field("duration", r.warp.duration);
       w.field("converged", options.mode == RetimeMode::TimeOptimal ? r.feasible : r.solve.converged);
@@ -415,7 +420,7 @@ class RetimeNode final : public graph::Node {
 NodeType retime_node_type() {
   NodeSpec spec{
       .type = "retime.retime",
-      .version = 2,
+      .version = 3,
       .doc =
           "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic "
           "spline, "
@@ -476,9 +481,9 @@ NodeType retime_node_type() {
           {.name = "mode",
            .type = ParamType::Enum,
            .default_value = std::string("optimise"),
-           .doc =
-               "optimise (eq. 14 for the duration and pins) or time_optimal (the shortest feasible playback)",
-           .choices = {"optimise", "time_optimal"}},
+           .doc = "optimise, also called match (eq. 14 for the requested duration and pins) or time_optimal "
+                  "(the shortest feasible playback; duration and pins ignored)",
+           .choices = {"optimise", "match", "time_optimal"}},
           {.name = "alpha",
            .type = ParamType::Float,
            .default_value = 1000.0,
@@ -499,6 +504,14 @@ NodeType retime_node_type() {
                   "its speed (a wrong gravity shows at once) and the ground phases take the excess",
            .min = 0.0,
            .max = 1e12},
+          {.name = "flights",
+           .type = ParamType::Enum,
+           .default_value = std::string("hold"),
+           .doc = "hold: every flight played exactly at the one ballistic speed, √(|g| / 9.81) with the "
+                  "hulls' gravity g (1x unedited; p̈ = 0), the ground phases taking the rest of the "
+                  "duration (the paper's fig. 1); free: flights weighed like other frames (flight_weight). "
+                  "Gravity not straight down: free, said in the log",
+           .choices = {"hold", "free"}},
           {.name = "knot_spacing",
            .type = ParamType::Float,
            .default_value = 0.1,

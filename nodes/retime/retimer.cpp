@@ -137,11 +137,15 @@ std::string shown(double x) {
 // The options validated; returns the segment count.
 int checked_segments(const RetimeOptions& options) {
   options.validate();
-  const double segments = std::ceil(options.duration / options.knot_spacing - 1e-9);
-  return std::max(1, static_cast<int>(segments));
+  return warp_segments(options);
 }
 
 }  // namespace
+
+int warp_segments(const RetimeOptions& options) {
+  const double segments = std::ceil(options.duration / options.knot_spacing - 1e-9);
+  return std::max(1, static_cast<int>(segments));
+}
 
 void RetimeOptions::validate() const {
   using options::require;
@@ -167,9 +171,10 @@ RetimeResult retime(const PathObjective& objective, const RetimeOptions& options
   const auto start = std::chrono::steady_clock::now();
   const int segments = checked_segments(options);
   const double source_duration = objective.source_duration();
-  TimeWarp warp = initial_warp(source_duration, options.duration, segments, options.pins, options.start);
+  TimeWarp warp =
+      initial_warp(source_duration, options.duration, segments, options.pins, options.start, options.holds);
   const WarpConstraints constraints =
-      warp_constraints(source_duration, options.duration, segments, options.pins);
+      warp_constraints(source_duration, options.duration, segments, options.pins, options.holds);
 
   // controls = particular + basis * y for every y: the constraints' null space (orthonormal).
   const Eigen::Map<const Eigen::VectorXd> start_controls(warp.controls.data(),

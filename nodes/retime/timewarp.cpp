@@ -90,8 +90,67 @@ TimeWarp TimeWarp::uniform(double source_duration, double duration, int segments
   return warp;
 }
 
+std::pair<int, int> held_segments(const Hold& hold, double duration, int segments) {
+  const double h = duration / segments;
+  // A hold ending on a knot does not touch the segment after it (up to rounding of the times).
+  const double slack = 1e-9 * h;
+  const int first =
+      std::clamp(static_cast<int>(std::floor((hold.output_start + slack) / h)), 0, segments - 1);
+  const int last = std::clamp(static_cast<int>(std::ceil((hold.output_start + hold.length - slack) / h)),
+                              first + 1, segments);
+  return {first, last};
+}
+
+namespace {
+
+// Per control a hold fixes: its index and value (the line's value at the control's site).
+std::vector<std::pair<int, double>> held_controls(double source_duration, double duration, int segments,
+                                                  const std::vector<Hold>& holds) {
+  const double h = duration / segments;
+  std::vector<std::pair<int, double>> fixed;
+  std::vector<int> owner(static_cast<std::size_t>(segments + 3), -1);
+  std::vector<double> value(static_cast<std::size_t>(segments + 3), 0);
+  for (std::size_t i = 0; i < holds.size(); ++i) {
+    const Hold& hold = holds[i];
+    const std::string name = "hold " + std::to_string(i) + " (source " + seconds(hold.source_start) +
+                             " from output " + seconds(hold.output_start) + " for " + seconds(hold.length) +
+                             " at speed " + std::to_string(hold.speed) + ")";
+    if (!std::isfinite(hold.source_start) || !std::isfinite(hold.output_start) ||
+        !std::isfinite(hold.length) || !std::isfinite(hold.speed))
+      throw std::invalid_argument("time warp: " + name + ": expected finite numbers");
+    if (!(hold.length > 0) || !(hold.speed > 0))
+      throw std::invalid_argument("time warp: " + name + ": expected a positive length and speed");
+    const auto [first, last] = held_segments(hold, duration, segments);
+    auto line = [&](double t) { return hold.source_start + hold.speed * (t - hold.output_start); };
+    if (hold.output_start < 0 || hold.output_start + hold.length > duration * (1 + 1e-12) ||
+        line(first * h) < -1e-9 * source_duration || line(last * h) > source_duration * (1 + 1e-9))
+      throw std::invalid_argument("time warp: " + name + ": its segments (output " + seconds(first * h) +
+                                  " to " + seconds(last * h) + ", source " + seconds(line(first * h)) +
+                                  " to " + seconds(line(last * h)) + ") leave the warp's " +
+                                  seconds(duration) + " x the source's " + seconds(source_duration));
+    for (int j = first; j <= last + 2; ++j) {
+      const double v = line((j - 1) * h);
+      const std::size_t k = static_cast<std::size_t>(j);
+      if (owner[k] >= 0) {
+        if (std::abs(value[k] - v) > 1e-12 * source_duration)
+          throw std::invalid_argument("time warp: " + name + " and hold " + std::to_string(owner[k]) +
+                                      " fix the same control to different values: they are closer than "
+                                      "the spline's three segments of " +
+                                      seconds(h) + " (use shorter segments)");
+        continue;
+      }
+      owner[k] = static_cast<int>(i);
+      value[k] = v;
+      fixed.push_back({j, v});
+    }
+  }
+  return fixed;
+}
+
+}  // namespace
+
 WarpConstraints warp_constraints(double source_duration, double duration, int segments,
-                                 const std::vector<Pin>& pins) {
+                                 const std::vector<Pin>& pins, const std::vector<Hold>& holds) {
   check_sizes(source_duration, duration, segments);
   for (std::size_t i = 0; i < pins.size(); ++i)  // before sorting: NaN does not order
     if (!std::isfinite(pins[i].source_time) || !std::isfinite(pins[i].output_time))
@@ -122,9 +181,10 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
                                     seconds(pin.output_time) + " (playback cannot run backwards)");
     }
   }
+  const auto fixed = held_controls(source_duration, duration, segments, holds);
   const int controls = segments + 3;
-  WarpConstraints c{Eigen::MatrixXd::Zero(2 + static_cast<int>(sorted.size()), controls),
-                    Eigen::VectorXd::Zero(2 + static_cast<int>(sorted.size()))};
+  const int rows = 2 + static_cast<int>(sorted.size() + fixed.size());
+  WarpConstraints c{Eigen::MatrixXd::Zero(rows, controls), Eigen::VectorXd::Zero(rows)};
   auto add_row = [&](int row, double t, double value) {
     const WarpSample s = basis(duration, segments, t);
     for (int i = 0; i < 4; ++i) c.A(row, s.first + i) = s.weight[i];
@@ -134,12 +194,17 @@ WarpConstraints warp_constraints(double source_duration, double duration, int se
   add_row(1, duration, source_duration);
   for (std::size_t i = 0; i < sorted.size(); ++i)
     add_row(2 + static_cast<int>(i), sorted[i].output_time, sorted[i].source_time);
+  for (std::size_t i = 0; i < fixed.size(); ++i) {
+    const int row = 2 + static_cast<int>(sorted.size() + i);
+    c.A(row, fixed[i].first) = 1;
+    c.b[row] = fixed[i].second;
+  }
   return c;
 }
 
 TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins,
-                      const std::vector<Pin>& playback) {
-  const WarpConstraints constraints = warp_constraints(source_duration, duration, segments, pins);
+                      const std::vector<Pin>& playback, const std::vector<Hold>& holds) {
+  const WarpConstraints constraints = warp_constraints(source_duration, duration, segments, pins, holds);
   // Knots of the piecewise-linear playback: the given playback, or the ends and the pins in
   // output order.
   std::vector<Pin> knots = playback;
@@ -178,6 +243,10 @@ TimeWarp initial_warp(double source_duration, double duration, int segments, con
     double closest = duration;
     for (std::size_t i = 1; i < knots.size(); ++i)
       closest = std::min(closest, knots[i].output_time - knots[i - 1].output_time);
+    if (!holds.empty())
+      throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments of " + seconds(h) +
+                                  " cannot pass the pins and holds increasingly (a hold too near an end, a "
+                                  "pin or another hold): use shorter segments");
     throw std::invalid_argument("time warp: " + std::to_string(segments) + " segments of " + seconds(h) +
                                 " cannot pass the pins increasingly; the closest pins (or ends) are " +
                                 seconds(closest) + " apart: use shorter segments");

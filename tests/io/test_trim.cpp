@@ -96,8 +96,8 @@ TEST_CASE("trim auto: a rest pose put first is dropped, the clip read as before"
     // In metres, +Y up (all of these files are Y up), written in mm.
     const kg::motion::Motion posed_metres =
         with_rest_pose_first(kg::io::import_bvh(*path, {.trim = "none"}).motion);
-    const auto in_mm =
-        dir.write("rest_first_mm.bvh", kg::io::write_bvh_string(posed_metres, {.units = "mm", .precision = 9}));
+    const auto in_mm = dir.write("rest_first_mm.bvh",
+                                 kg::io::write_bvh_string(posed_metres, {.units = "mm", .precision = 9}));
     for (double rate_factor : {1.0, 2.0, 0.5}) {
       INFO("rate x" << rate_factor);
       const ImportOptions options{.fps = clip.motion.fps * rate_factor};
@@ -159,6 +159,7 @@ TEST_CASE("trim FIRST..LAST keeps those frames; bad values are refused with the 
     CHECK_THROWS_WITH(o.validate(), Catch::Contains("ImportOptions.trim") &&
                                         Catch::Contains("auto, none, FIRST..LAST or FIRST.."));
   }
-  CHECK_THROWS_WITH(kg::io::import_bvh(*path, {.trim = "0.." + std::to_string(n)}),
-                    Catch::Contains("the clip has " + std::to_string(n) + " frames (0.." + std::to_string(n - 1) + ")"));
+  CHECK_THROWS_WITH(
+      kg::io::import_bvh(*path, {.trim = "0.." + std::to_string(n)}),
+      Catch::Contains("the clip has " + std::to_string(n) + " frames (0.." + std::to_string(n - 1) + ")"));
 }

@@ -287,3 +287,24 @@ TEST_CASE("retime refuses options out of range, naming the option and the range 
     CHECK_THROWS_WITH(retime(objective, b.options), Catch::Matchers::Contains(b.message));
   }
 }
+
+TEST_CASE("holds play exactly at their speed over the segments they meet, whatever the objective prefers") {
+  // The objective wants the stiff second (source 1 to 2 s) at 1x; a hold asks 1.5x from source 1.1 s.
+  const SpeedObjective objective(200);
+  const Hold hold{.source_start = 1.1, .output_start = 0.7, .length = 0.4, .speed = 1.5};
+  const RetimeResult r = retime(objective, {.duration = 2.0, .holds = {hold}});
+  INFO(r.message);
+  CHECK(r.converged);
+  CHECK(r.warp.at(2.0) == Approx(3.0).epsilon(1e-9));
+  const auto [first, last] = held_segments(hold, r.warp.duration, r.warp.segments());
+  const double h = r.warp.knot_spacing();
+  CHECK(first * h <= hold.output_start + 1e-12);
+  CHECK(last * h >= hold.output_start + hold.length - 1e-12);
+  for (double t = first * h; t <= last * h; t += h / 7) {
+    const WarpSample s = r.warp.sample(t);
+    CHECK(s.p == Approx(1.1 + 1.5 * (t - 0.7)).margin(1e-9));
+    CHECK(s.pdot == Approx(1.5).margin(1e-9));
+    CHECK(s.pddot == Approx(0).margin(1e-6));
+  }
+  CHECK(r.warp.strictly_increasing());
+}

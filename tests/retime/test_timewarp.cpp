@@ -1,6 +1,8 @@
 #include <catch2/catch.hpp>
 
+#include <cmath>
 #include <random>
+#include <string>
 
 #include "kg/retime/timewarp.hpp"
 
@@ -118,4 +120,47 @@ TEST_CASE("warp constraints refuse contradictory and misplaced pins, and segment
                initial_warp(3, 2, 1, {{0.3, 0.2}, {0.4, 0.25}, {2.9, 0.3}, {2.95, 1.9}});
              }),
              Contains("use shorter segments"));
+}
+
+TEST_CASE("holds fix the controls of the segments they meet to their line; holds that disagree are refused") {
+  const Hold hold{.source_start = 1.0, .output_start = 0.55, .length = 0.3, .speed = 1.0};
+  // 20 segments of 0.1 s: the hold meets segments 5 to 8 (0.5 to 0.9 s), whose controls are 5 to 11.
+  CHECK(held_segments(hold, 2.0, 20) == std::pair<int, int>{5, 9});
+  CHECK(held_segments({.source_start = 1.0, .output_start = 0.5, .length = 0.3}, 2.0, 20) ==
+        std::pair<int, int>{5, 8});  // ending on a knot: not the segment after
+  const WarpConstraints c = warp_constraints(3.0, 2.0, 20, {}, {hold});
+  CHECK(c.A.rows() == 2 + 7);
+  const TimeWarp warp = initial_warp(3.0, 2.0, 20, {}, {}, {hold});
+  CHECK(warp.strictly_increasing());
+  for (double t = 0.5; t <= 0.9; t += 0.01) CHECK(warp.sample(t).p == Approx(1.0 + (t - 0.55)).margin(1e-9));
+
+  auto message = [](auto f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  using Catch::Matchers::Contains;
+  // Two lines one segment apart share controls.
+  CHECK_THAT(message([&] {
+               warp_constraints(3.0, 2.0, 20, {},
+                                {hold, {.source_start = 1.5, .output_start = 0.95, .length = 0.2}});
+             }),
+             Contains("fix the same control to different values") && Contains("use shorter segments"));
+  CHECK_THAT(message([] {
+               warp_constraints(3.0, 2.0, 20, {},
+                                {{.source_start = 1.0, .output_start = 1.9, .length = 0.3}});
+             }),
+             Contains("leave the warp"));
+  CHECK_THAT(message([] {
+               warp_constraints(3.0, 2.0, 20, {}, {{.source_start = 1.0, .output_start = 0.5, .length = 0}});
+             }),
+             Contains("positive length and speed"));
+  CHECK_THAT(message([] {
+               warp_constraints(3.0, 2.0, 20, {},
+                                {{.source_start = NAN, .output_start = 0.5, .length = 0.2}});
+             }),
+             Contains("finite"));
 }

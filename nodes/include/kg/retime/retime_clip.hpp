@@ -37,14 +37,29 @@ enum class RetimeMode {
   TimeOptimal,  // the shortest duration within the hulls (duration and pins ignored)
 };
 
+// The gravity a captured clip obeys, m/s²: a flight held under gravity g plays at √(|g| / this).
+inline constexpr double kCaptureGravity = 9.81;
+
+enum class FlightTiming {
+  Free,  // flight frames weigh in the objective like the others (times flight_weight)
+  // Every flight (two or more consecutive flight frames) is played at one constant speed, exactly
+  // (TimeWarp holds): ṗ = √(|g| / kCaptureGravity), p̈ = 0, the only ballistic timing under the
+  // hulls' gravity g (straight down; another direction: no constant speed is ballistic, and the
+  // flights stay free, said in the message). A free solve first finds where each flight plays;
+  // the held solve keeps its middle there and the ground phases take the rest of the duration.
+  Hold,
+};
+const char* to_string(FlightTiming timing);  // "free", "hold"
+
 struct ClipRetimeOptions {
   RetimeOptions solve{};  // duration (output s), pins, knot spacing, grid, iterations
   RetimeMode mode = RetimeMode::Optimise;
   TorqueTarget target = TorqueTarget::Original;
-  double alpha = 1000;             // feasibility weight (ObjectiveWeights)
-  double beta = 1;                 // torque weight
-  double flight_weight = 1;        // multiplies alpha on flight frames (ObjectiveWeights::flight)
-  double inside_tolerance = 0.01;  // plane units: a timing this close to its hull counts as inside
+  double alpha = 1000;                        // feasibility weight (ObjectiveWeights)
+  double beta = 1;                            // torque weight
+  double flight_weight = 1;                   // multiplies alpha on flight frames (ObjectiveWeights::flight)
+  FlightTiming flights = FlightTiming::Free;  // Optimise mode only
+  double inside_tolerance = 0.01;             // plane units: a timing this close to its hull counts as inside
   TimeOptimalOptions time_optimal{};
   // Throws std::invalid_argument naming the field, its value and its range (DESIGN.md 15):
   // alpha, beta, flight_weight and inside_tolerance >= 0 and finite, time_optimal.validate(),
@@ -74,7 +89,10 @@ struct ClipRetime {
   // without one (flight, not exactly physical) are reported by share_at_point, not counted here:
   // captured flights scatter about their least-squares points.
   bool feasible = true;
-  std::string message;  // one paragraph for logs
+  int flights_held = 0;     // FlightTiming::Hold: the flights played at held_speed
+  double held_speed = 0;    // source seconds per output second
+  std::string flight_note;  // FlightTiming::Hold: what was held, or why nothing was
+  std::string message;      // one paragraph for logs: first, in one sentence, what could not be met
 };
 
 // Throws std::invalid_argument for inputs that disagree (sizes, a Reference target without

@@ -1,6 +1,6 @@
 // The retimer of McCann et al. 2006 (§3.5, §3.6): the strictly increasing p(t) (timewarp.hpp)
 // minimising ∫ objective(p(t), p̈(t), ṗ(t)²) dt over output time, with its ends kept, its total
-// duration given and any pins met exactly, by L-BFGS (Ceres' GradientProblemSolver) over the
+// duration given and any pins and holds met exactly, by L-BFGS (Ceres' GradientProblemSolver) over the
 // spline's controls with analytic gradients.
 //
 // The linear constraints are eliminated (controls = particular + null-space basis · y), so every
@@ -53,6 +53,7 @@ inline constexpr int kMaxSamplesPerFrame = 1000;
 struct RetimeOptions {
   double duration = 0;        // output seconds (finite, > 0)
   std::vector<Pin> pins{};    // source moments at output times (finite; warp_constraints)
+  std::vector<Hold> holds{};  // stretches played at one constant speed, met exactly (warp_constraints)
   std::vector<Pin> start{};   // samples of a playback to start from (initial_warp's `playback`);
                               // empty: constant speed between the ends and pins
   double knot_spacing = 0.1;  // output seconds between the spline's controls (> 0, at most
@@ -87,6 +88,9 @@ struct SampleGrid {
 
   int samples() const;  // sample points: Σ steps + 1 (the empty grid has none)
 };
+
+// The segments of the warp retime() solves for: duration / knot_spacing, rounded up, >= 1.
+int warp_segments(const RetimeOptions& options);
 
 struct RetimeResult {
   TimeWarp warp;

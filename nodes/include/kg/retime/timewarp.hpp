@@ -16,6 +16,7 @@
 
 #include <array>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -58,26 +59,43 @@ struct TimeWarp {
   static TimeWarp uniform(double source_duration, double duration, int segments);
 };
 
-// The linear constraints on a warp's controls: rows A c = b for the kept ends and the pins.
+// Playback held at one constant speed from a given moment: p(t) = source_start + speed (t −
+// output_start) on every segment of the warp that meets [output_start, output_start + length]
+// (output seconds). Whole segments: a cubic that is a line on part of a segment is that line on
+// all of it. The retimer holds a flight this way (ballistic: ṗ constant, p̈ = 0).
+struct Hold {
+  double source_start = 0;  // source seconds
+  double output_start = 0;  // output seconds
+  double length = 0;        // output seconds, > 0
+  double speed = 1;         // source seconds per output second, > 0
+};
+
+// The whole segments a hold covers, [first, last) (warp layout of `segments` over `duration`).
+std::pair<int, int> held_segments(const Hold& hold, double duration, int segments);
+
+// The linear constraints on a warp's controls: rows A c = b for the kept ends, the pins and the
+// holds (one row per control a hold fixes: the line's value at the control's site).
 struct WarpConstraints {
-  Eigen::MatrixXd A;  // (2 + pins) x controls
+  Eigen::MatrixXd A;  // (2 + pins + held controls) x controls
   Eigen::VectorXd b;  // source seconds
 };
 
 // Throws std::invalid_argument naming the pin when a pin's times are not finite, it lies outside
 // the open (0, duration) x (0, source_duration) (the ends are kept already), two pins share an
 // output time, or pins run backwards (a later output time playing an earlier source moment: no
-// increasing p(t) meets them).
+// increasing p(t) meets them); naming the hold when its numbers are not finite, its length or
+// speed is not positive, it leaves [0, duration] x [0, source_duration], or two holds fix one
+// control to different values (closer than three segments: use shorter segments).
 WarpConstraints warp_constraints(double source_duration, double duration, int segments,
-                                 const std::vector<Pin>& pins);
+                                 const std::vector<Pin>& pins, const std::vector<Hold>& holds = {});
 
-// A strictly increasing warp meeting the constraints: `playback` (samples of a playback to start
-// from, in increasing output and source time, from (0, 0) to (duration, source_duration); empty:
+// A strictly increasing warp meeting the constraints (pins and holds): `playback` (samples of a playback to
+// start from, in increasing output and source time, from (0, 0) to (duration, source_duration); empty:
 // piecewise-constant speed between the ends and pins) fitted by a spline and corrected onto the
 // constraints. Throws std::invalid_argument for a playback not increasing, or (naming the closest
 // pair of pins) when `segments` is too coarse to pass the pins increasingly.
 TimeWarp initial_warp(double source_duration, double duration, int segments, const std::vector<Pin>& pins,
-                      const std::vector<Pin>& playback = {});
+                      const std::vector<Pin>& playback = {}, const std::vector<Hold>& holds = {});
 
 // A warp of `segments` segments through the playback samples (output_times[i], source_times[i]),
 // which start at (0, 0) and increase: its controls sample the piecewise-linear playback at their
