@@ -73,6 +73,16 @@ void Report::write(std::ostream& os, int indent) const {
   os << text;
 }
 
+std::vector<std::string> Report::strings(std::string_view key) const {
+  std::vector<std::string> out;
+  if (!doc_ || !doc_->root.is_object()) return out;
+  const auto it = doc_->root.find(std::string(key));
+  if (it == doc_->root.end() || !it->is_array()) return out;
+  for (const Json& item : *it)
+    if (item.is_string()) out.push_back(item.get<std::string>());
+  return out;
+}
+
 std::string Report::text(int indent) const {
   std::ostringstream os;
   write(os, indent);

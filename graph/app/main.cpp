@@ -15,6 +15,7 @@
 #include "describe.hpp"
 #include "host.hpp"
 #include "kg/base/error.hpp"
+#include "kg/base/report.hpp"
 #include "kg/graph/executor.hpp"
 #include "kg/graph/plugin_abi.hpp"
 #include "kg/graph/plugin_loader.hpp"
@@ -73,6 +74,65 @@ int run(Host& host, const Options& o) {
   return code;
 }
 
+// `inspect`: the clip read with every frame by the importer every graph uses, then motion.inspect.
+constexpr const char* kInspectGraph = R"(version: 1
+doc: kinegraph inspect CLIP
+variables:
+  input: {required: true}
+  skeleton: {default: ""}
+  units: {default: "auto"}
+  up: {default: "auto"}
+  source_fps: {default: "0"}
+  trim: {default: "none"}
+nodes:
+  source:
+    type: io.import_motion
+    params: {path: "${input}", skeleton: "${skeleton}", units: "${units}", up: "${up}", fps: "${source_fps}", trim: none}
+  inspect: {type: motion.inspect}
+connections:
+  - {from: source.motion, to: inspect.motion}
+)";
+
+int inspect(Host& host, const Options& o) {
+  std::map<std::string, std::string> sets = o.sets;
+  for (const char* fixed : {"input", "skeleton"})
+    if (sets.count(fixed))
+      throw Failure{kExitUsage, std::string("inspect: give the ") + fixed + " as " +
+                                    (fixed == std::string("input") ? "CLIP" : "--skeleton")};
+  sets["input"] = o.clip.string();
+  sets["skeleton"] = o.skeleton.string();
+  graph::Graph g;
+  try {
+    g = graph::load_graph_from_string(kInspectGraph, "kinegraph inspect", host.registry, sets);
+  } catch (const std::exception& e) {
+    throw Failure{kExitGraphInvalid, e.what()};
+  }
+  std::vector<std::string> notes;
+  graph::RunOptions options;
+  options.on_log = [&](const std::string& node, const std::string& message) {
+    // inspect's own lines are its report's summary; a failure is printed below
+    if (node == "source" && message.rfind("failed: ", 0) != 0) notes.push_back(message);
+  };
+  const graph::RunResult result = graph::run_graph(g, host.registry, options);
+  if (!result.ok) {
+    for (const std::string& note : notes) std::cerr << note << '\n';
+    for (const graph::NodeRun& n : result.nodes)
+      if (n.status == graph::NodeStatus::Failed)
+        std::cerr << "kinegraph: inspect " << o.clip.string() << ": " << n.message << '\n';
+    return kExitNodeFailed;
+  }
+  const Report& report = result.outputs.at("inspect.report").get<Report>();
+  if (o.json) {
+    for (const std::string& note : notes) std::cerr << note << '\n';
+    report.write(std::cout);
+    std::cout << '\n';
+    return kExitOk;
+  }
+  for (const std::string& note : notes) std::cout << "read: " << note << '\n';
+  for (const std::string& line : report.strings("summary")) std::cout << line << '\n';
+  return kExitOk;
+}
+
 // Every problem, one line each; a graph without problems is valid even when a run needs values.
 int validate(Host& host, const Options& o) {
   const graph::GraphCheck check = check_graph(host, o.graph, o.sets);
@@ -119,6 +179,8 @@ int dispatch(const Options& o, const char* argv0) {
       return batch(host, o, argv0);
     case Verb::Validate:
       return validate(host, o);
+    case Verb::Inspect:
+      return inspect(host, o);
     case Verb::Dot: {
       const graph::Graph g = load_graph(host, o.graph, o.sets);
       write_dot(std::cout, g, host.registry);
@@ -149,7 +211,7 @@ int main(int argc, char** argv) {
   } catch (const UsageError& e) {
     std::cerr << "kinegraph: " << e.what() << "\n"
               << "usage: kinegraph run|validate|dot|batch GRAPH [options], kinegraph nodes [--json], "
-                 "kinegraph merge DIR; see kinegraph --help\n";
+                 "kinegraph merge DIR, kinegraph inspect CLIP; see kinegraph --help\n";
     return kExitUsage;
   }
   try {

@@ -26,7 +26,10 @@ constexpr VerbName kVerbs[] = {
     {"nodes", Verb::Nodes, "list every node type: ports, params, defaults, ranges, choices, docs and origin"},
     {"dot", Verb::Dot, "print GRAPH as Graphviz: kinegraph dot GRAPH | dot -Tsvg > graph.svg"},
     {"batch", Verb::Batch, "run GRAPH once per input file, each item in its own process, with a manifest"},
-    {"merge", Verb::Merge, "merge the shard manifests in DIR into DIR/manifest.jsonl"}};
+    {"merge", Verb::Merge, "merge the shard manifests in DIR into DIR/manifest.jsonl"},
+    {"inspect", Verb::Inspect,
+     "the motion doctor: CLIP's joints, rate, up axis, units, calibration frames, footplants, flights and "
+     "their gravity, floor penetration, pops, and the --set values that fix what it found"}};
 
 const char* verb_name(Verb verb) {
   for (const VerbName& v : kVerbs) {
@@ -38,6 +41,7 @@ const char* verb_name(Verb verb) {
 // The positional a verb takes: GRAPH, merge's DIR, or none.
 const char* operand_of(Verb verb) {
   if (verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot || verb == Verb::Batch) return "GRAPH";
+  if (verb == Verb::Inspect) return "CLIP";
   return verb == Verb::Merge ? "DIR" : nullptr;
 }
 
@@ -136,7 +140,7 @@ using O = Options;
 using S = const std::string&;
 constexpr OptionSpec kOptions[] = {
     {"--set", "", "NAME=VALUE", "give the graph variable NAME a value (GRAPH documents its variables)",
-     kGraphVerbs, apply_set},
+     kGraphVerbs | in(Verb::Inspect), apply_set},
     {"--jobs", "-j", "N",
      "run: independent branches on up to N threads (default 1); batch: items at once (default: the "
      "cores this process may use; with --slurm, the CPUs of each array task, default 1)",
@@ -147,8 +151,11 @@ constexpr OptionSpec kOptions[] = {
      "files written come out byte for byte the same on every run and machine (no wall-clock times)",
      in(Verb::Run), [](O& o, S) { o.reproducible = true; }},
     {"--plugin-dir", "", "DIR", "load every plugin (*.so) directly in DIR; may be repeated",
-     kGraphVerbs | in(Verb::Nodes), apply_plugin_dir},
-    {"--json", "", "", "print JSON instead of text", in(Verb::Nodes), [](O& o, S) { o.json = true; }},
+     kGraphVerbs | in(Verb::Nodes) | in(Verb::Inspect), apply_plugin_dir},
+    {"--json", "", "", "print JSON instead of text", in(Verb::Nodes) | in(Verb::Inspect),
+     [](O& o, S) { o.json = true; }},
+    {"--skeleton", "", "ASF", "inspect: the .asf of an .amc clip (default: <subject>.asf beside it)",
+     in(Verb::Inspect), [](O& o, S v) { set_path_once(o.skeleton, "--skeleton", v, "an .asf file"); }},
     {"--inputs", "", "PATTERN...",
      "input files, as paths or patterns: * ? [..] within a folder name, ** for any depth of folders "
      "(quoted); every argument up to the next option is a pattern",
@@ -239,7 +246,9 @@ struct CommandLine {
     Verbs& v = verbs.emplace_back(Verbs{verb, sub, {}, nullptr, {}, {}});
     if (const char* operand = operand_of(verb)) {
       v.operand_option = sub->add_option(operand, v.operand,
-                                         verb == Verb::Merge ? "the batch's folder" : "the graph file (YAML)")
+                                         verb == Verb::Merge     ? "the batch's folder"
+                                         : verb == Verb::Inspect ? "the clip (.bvh or .amc)"
+                                                                 : "the graph file (YAML)")
                              ->type_name("");
     }
     sub->add_option("extra", v.extra)->group("");
@@ -272,6 +281,7 @@ usage:
   kinegraph batch GRAPH --inputs PATTERN... --out DIR --slurm SCRIPT [--shards N]
                   [--sbatch OPTION]... [--submit] [--jobs N] [--set NAME=VALUE]...
   kinegraph merge DIR
+  kinegraph inspect CLIP [--skeleton ASF] [--json] [--set NAME=VALUE]... [--plugin-dir DIR]...
   kinegraph --help | --version
 
 verbs:
@@ -299,6 +309,12 @@ verbs:
             script instead of running (--submit also submits them, the merge after the array)
   merge     merge the shard manifests in DIR into DIR/manifest.jsonl and report what failed or
             is missing
+  inspect   the motion doctor: CLIP (.bvh, or .amc with --skeleton) read with every frame, then
+            its joint tree, frames and rate, the up axis and unit it was read with, calibration
+            frames, footplants per foot point and their skate, flights and the gravity each
+            implies (and the true rate when the header's is off by a whole factor), floor
+            penetration, pops, and the --set values that fix what it found; --json prints the
+            motion.inspect report. --set units=, up= and source_fps= read the clip otherwise
 
 options:
   --set NAME=VALUE  give the graph variable NAME a value (GRAPH documents its variables at the top)
@@ -437,9 +453,10 @@ void take_operand(const CommandLine::Verbs& v, Options& o) {
     if (v.operand_option->count() == 0) {
       throw UsageError(v.verb == Verb::Merge
                            ? std::string("merge needs the batch's DIR")
-                           : std::string(verb_name(v.verb)) + " needs a " + operand + " file");
+                           : std::string(verb_name(v.verb)) + " needs a " + operand + " file" +
+                                 (v.verb == Verb::Inspect ? " (.bvh, or .amc)" : ""));
     }
-    (v.verb == Verb::Merge ? o.out : o.graph) = v.operand;
+    (v.verb == Verb::Merge ? o.out : v.verb == Verb::Inspect ? o.clip : o.graph) = v.operand;
   }
   if (!v.extra.empty()) throw UsageError("unexpected argument '" + v.extra.front() + "'");
 }

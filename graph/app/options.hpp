@@ -23,7 +23,7 @@ enum ExitCode : int {
   kExitInterrupted = 130,  // batch: stopped by SIGINT or SIGTERM; running it again continues
 };
 
-enum class Verb { Help, Version, Run, Validate, Nodes, Dot, Batch, Merge };
+enum class Verb { Help, Version, Run, Validate, Nodes, Dot, Batch, Merge, Inspect };
 
 // --shard I/N: items whose position in the sorted input list is I modulo N (0 <= I < N).
 struct Shard {
@@ -40,7 +40,9 @@ struct Options {
   bool jobs_given = false;                         // batch defaults jobs to the cores it may use
   std::filesystem::path report;                    // --report FILE (run); empty: none
   std::vector<std::filesystem::path> plugin_dirs;  // --plugin-dir DIR, in order
-  bool json = false;                               // --json (nodes)
+  bool json = false;                               // --json (nodes, inspect)
+  std::filesystem::path clip;                      // inspect's CLIP
+  std::filesystem::path skeleton;                  // --skeleton ASF (inspect)
   bool reproducible = false;                       // --reproducible (run; batch always is)
 
   // batch

@@ -114,4 +114,11 @@ Eigen::MatrixXd gaussian_smoothed(const Eigen::MatrixXd& curves, double sigma_fr
   return out;
 }
 
+double percentile(std::vector<double> v, double q) {
+  if (v.empty()) return 0;
+  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+  return v[k];
+}
+
 }  // namespace kg::motion

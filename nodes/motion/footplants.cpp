@@ -1,6 +1,8 @@
 // Footplant detection (footplants.hpp).
 #include "kg/motion/footplants.hpp"
+
 #include "kg/base/option_check.hpp"
+#include "kg/motion/filters.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -75,13 +77,6 @@ std::vector<PlantPoint> auto_points(const Skeleton& sk, int character, std::vect
   for (const PlantPoint& p : out) list += (list.empty() ? "" : ", ") + p.name;
   notes.push_back("points (auto): " + list);
   return out;
-}
-
-double percentile(std::vector<double> v, double q) {
-  if (v.empty()) return 0;
-  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * static_cast<double>(v.size() - 1));
-  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-  return v[k];
 }
 
 }  // namespace

@@ -651,3 +651,47 @@ TEST_CASE("a fuzzed joint-name pattern fails at its file:line with a short excer
     CHECK_FALSE(fs::exists(out));
   }
 }
+
+TEST_CASE("inspect: the motion doctor on a clip, as text and JSON; bad clips exit non-zero", "[cli]") {
+  const fs::path clip = fs::path(KG_DATA_DIR) / "cmu/bvh_cmu_names/16_01.bvh";
+  SECTION("16_01.bvh says 30 fps: its jump's flight says 120, and the fix is given") {
+    if (!fs::exists(clip)) {
+      WARN("skipped: " << clip << " not found");
+      return;
+    }
+    const Result text = kinegraph({"inspect", clip.string()});
+    INFO(show(text));
+    REQUIRE(text.code == 0);
+    CHECK_THAT(text.out, Contains("read: ") && Contains("322 frames at 30 fps") &&
+                             Contains("the clip's true rate is 120 fps") && Contains("plants of lfoot: ") &&
+                             Contains("flight frames ") && Contains("fixes: --set source_fps=120"));
+    const Result json = kinegraph({"inspect", clip.string(), "--json"});
+    INFO(show(json));
+    REQUIRE(json.code == 0);
+    const YAML::Node doc = YAML::Load(json.out);
+    CHECK(doc["up"].as<std::string>() == "y");
+    CHECK(doc["units"].as<std::string>() == "asf");
+    CHECK(doc["header_fps"].as<double>() == 30.0);
+    CHECK(doc["source_fps"].as<double>() == 120.0);
+    CHECK(doc["calibration_frames"].size() == 0);
+    CHECK(doc["plants"].size() == 4);
+    REQUIRE(doc["flights"].size() >= 1);
+    CHECK(doc["fixes"][0].as<std::string>() == "--set source_fps=120");
+    // The fix applied: the rate is confirmed and nothing is left to fix.
+    const Result fixed = kinegraph({"inspect", clip.string(), "--json", "--set", "source_fps=120"});
+    REQUIRE(fixed.code == 0);
+    CHECK(YAML::Load(fixed.out)["fixes"].size() == 0);
+  }
+  SECTION("no clip, a missing clip, a clip without feet") {
+    CHECK(kinegraph({"inspect"}).code == 2);
+    const Result missing = kinegraph({"inspect", "/nonexistent/walk.bvh"});
+    CHECK(missing.code == 1);
+    CHECK_THAT(missing.err, Contains("/nonexistent/walk.bvh") && Contains("no such BVH file"));
+    const Result feet =
+        kinegraph({"inspect", (fs::path(KG_SOURCE_DIR) / "tests/graphs/data/two_joints.bvh").string()});
+    INFO(show(feet));
+    CHECK(feet.code == 1);
+    CHECK_THAT(feet.err, Contains("two_joints.bvh") && Contains("foot"));
+    CHECK(kinegraph({"inspect", clip.string(), "--set", "input=x.bvh"}).code == 2);
+  }
+}

@@ -579,6 +579,8 @@ TEST_CASE(
              {"source_fps", "-1", "-1"},
              {"trim", "5..3", "FIRST..LAST"},
              {"output_units", "furlong", "furlong"}}) {
+      // A graph that writes no clip (graphs/inspect.yaml) has no unit to write it in.
+      if (name == "output_units" && text.find("type: io.export_") == std::string::npos) continue;
       std::vector<std::string> args = base;
       args.insert(args.end(), {"--set", name + "=" + bad});
       const Result r = kinegraph(args);

@@ -12,7 +12,9 @@ std::vector<graph::NodeType> motion_node_types();   // motion.resample, motion.f
 std::vector<graph::NodeType> bvh_node_types();      // io.import_bvh, io.export_bvh, io.export_motion (io)
 std::vector<graph::NodeType> asf_amc_node_types();  // io.import_asf_amc, io.import_motion (nodes/io)
 std::vector<graph::NodeType> report_node_types();   // io.write_report (nodes/io)
-std::vector<graph::NodeType> synth_node_types();    // motion.synthesize (nodes/synth)
+std::vector<graph::NodeType>
+inspect_node_types();                             // motion.inspect (nodes/io: it names units as importers do)
+std::vector<graph::NodeType> synth_node_types();  // motion.synthesize (nodes/synth)
 // nodes/retarget: retarget.target, retarget.constraints_on_target, retarget.initial_estimate,
 // retarget.key_spacing
 std::vector<graph::NodeType> retarget_target_node_types();

@@ -12,6 +12,8 @@
 #include <memory>
 #include <ostream>
 #include <string>
+#include <string_view>
+#include <vector>
 
 namespace kg {
 
@@ -24,6 +26,9 @@ class Report {
   // nothing when empty.
   void write(std::ostream& os, int indent = 2) const;
   std::string text(int indent = 2) const;
+  // The strings of the document's top-level array `key` (other elements skipped); empty when the
+  // document is empty or has no such array.
+  std::vector<std::string> strings(std::string_view key) const;
 
  private:
   friend class JsonWriter;

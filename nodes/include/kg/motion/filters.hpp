@@ -41,4 +41,8 @@ enum class CurveEnds {
 // fewer than 2 samples come back as they are. Throws std::invalid_argument for another sigma.
 Eigen::MatrixXd gaussian_smoothed(const Eigen::MatrixXd& curves, double sigma_frames, CurveEnds ends);
 
+// The q-quantile of v (q in [0, 1], clamped) by rank: the element at floor(q (n - 1)) of v
+// sorted; 0 for an empty v.
+double percentile(std::vector<double> v, double q);
+
 }  // namespace kg::motion
