@@ -63,13 +63,14 @@ graph::NodeType inspect_type() {
   graph::NodeSpec spec{
       .type = "motion.inspect",
       .version = 1,
-      .doc = "The motion doctor: the joint tree (names, channels, rest lengths), frames and rate, the up axis "
-             "and unit the clip was read with, calibration frames (a T-pose or A-pose before the motion), "
-             "footplants per foot point with their skate, flights with the gravity each implies (and the "
-             "frame rate that gravity implies, when the header's is off by a whole factor), floor "
-             "penetration, pops (frames where a joint's velocity jumps), and the --set values that fix what "
-             "it found. Feed it the clip with every frame (io.import_motion with trim: none). Its report is "
-             "JSON (io.write_report); its figures go into batch manifests.",
+      .doc =
+          "The motion doctor: the joint tree (names, channels, rest lengths), frames and rate, the up axis "
+          "and unit the clip was read with, calibration frames (a T-pose or A-pose before the motion), "
+          "footplants per foot point with their skate, flights with the gravity each implies (and the "
+          "frame rate that gravity implies, when the header's is off by a whole factor), floor "
+          "penetration, pops (frames where a joint's velocity jumps), and the --set values that fix what "
+          "it found. Feed it the clip with every frame (io.import_motion with trim: none). Its report is "
+          "JSON (io.write_report); its figures go into batch manifests.",
       .inputs = {{"motion", "kg.Motion", true, "the clip, every frame kept"}},
       .outputs = {{"report", "kg.Report", true,
                    "up, units, header_fps, source_fps, calibration_frames, plants, flights (each with its "

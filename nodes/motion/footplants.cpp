@@ -144,6 +144,8 @@ void FootplantOptions::validate() const {
   require(options::positive(height_threshold), o, "height_threshold", height_threshold,
           "> 0 and finite (metres)");
   require(options::positive(speed_threshold), o, "speed_threshold", speed_threshold, "> 0 and finite (m/s)");
+  require(options::non_negative(speed_relative) && speed_relative < 1, o, "speed_relative", speed_relative,
+          "in [0, 1)");
   require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis,
           ">= 1 and finite (leave thresholds = enter thresholds x hysteresis)");
   require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s,
@@ -206,6 +208,10 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
   const int half_window = static_cast<int>(std::lround(o.rest_window_s * m.fps / 2));
   const int min_frames =
       std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
+  // Per point: its runs of min_frames or more within height_threshold of its rest level, and the
+  // warning it would get, said only if no point of its foot is planted during such a run.
+  std::vector<std::vector<std::pair<int, int>>> low_runs(np);
+  std::vector<std::string> would_warn(np);
   for (std::size_t i = 0; i < np; ++i) {
     auto speed = [&](int f) {
       const int a = std::max(0, f - k), b = std::min(frames - 1, f + k);
@@ -250,6 +256,17 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
         base[static_cast<std::size_t>(f)] = low;
       }
     d.points[i].rest_levels = base;
+    // The entering speed: speed_threshold, or a share of the point's own fast speed when that is
+    // more (a run's stance rolls at 0.1 to 1.3 m/s at 30 Hz; a walk's stays under 0.15).
+    std::vector<double> speeds(static_cast<std::size_t>(frames));
+    for (int f = 0; f < frames; ++f) speeds[static_cast<std::size_t>(f)] = speed(f);
+    const double fast = percentile(speeds, 0.9);
+    const double enter_speed = std::max(o.speed_threshold, o.speed_relative * fast);
+    if (enter_speed > o.speed_threshold)
+      d.notes.push_back(d.points[i].name + ": speed threshold " + text::significant(enter_speed, 3) +
+                        " m/s (" + text::significant(100 * o.speed_relative, 3) +
+                        "% of its 90th-percentile speed, " + text::significant(fast, 3) +
+                        " m/s: more than speed_threshold " + text::significant(o.speed_threshold, 3) + ")");
     const std::size_t plants_before = d.plants.size();
     int low_run = 0, longest_low_run = 0;  // consecutive frames within height_threshold
     std::vector<double> low_speeds;        // the point's speed at those frames
@@ -258,14 +275,16 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
     for (int f = 0; f < frames; ++f) {
       const double h = at(f, i).y() - base[static_cast<std::size_t>(f)], v = speed(f);
       low_run = h <= o.height_threshold ? low_run + 1 : 0;
+      if (low_run == min_frames) low_runs[i].push_back({f - min_frames + 1, f});
+      if (low_run > min_frames) low_runs[i].back().second = f;
       longest_low_run = std::max(longest_low_run, low_run);
       if (h <= o.height_threshold) low_speeds.push_back(v);
       if (!in) {
-        if (h <= o.height_threshold && v <= o.speed_threshold) {
+        if (h <= o.height_threshold && v <= enter_speed) {
           in = true;
           start = f;
         }
-      } else if (h > o.height_threshold * o.hysteresis || v > o.speed_threshold * o.hysteresis) {
+      } else if (h > o.height_threshold * o.hysteresis || v > enter_speed * o.hysteresis) {
         in = false;
         close(start, f - 1);
       }
@@ -280,11 +299,34 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
         << text::significant(*std::min_element(low_speeds.begin(), low_speeds.end()), 3) << " to "
         << text::significant(*std::max_element(low_speeds.begin(), low_speeds.end()), 3) << " m/s (median "
         << text::significant(percentile(low_speeds, 0.5), 3) << "), and a plant needs " << min_frames
-        << " frames below speed_threshold " << o.speed_threshold
+        << " frames below its speed threshold " << text::significant(enter_speed, 3)
         << " m/s (a run, or a noisy capture?); raise speed_threshold, or give the plants in a constraint "
            "file";
-      d.warnings.push_back(w.str());
+      would_warn[i] = w.str();
     }
+  }
+  // A point rolling on the floor while another point of its foot is planted (a run's ankle over
+  // its planted toe) needs no plant of its own: its foot has one.
+  auto same_foot = [&](std::size_t a, std::size_t b) {
+    auto above = [&](int joint, int ancestor) {
+      for (int j = joint; j >= 0; j = sk.joint(j).parent)
+        if (j == ancestor) return true;
+      return false;
+    };
+    const int ja = d.points[a].point.joint, jb = d.points[b].point.joint;
+    return above(ja, jb) || above(jb, ja);
+  };
+  for (std::size_t i = 0; i < np; ++i) {
+    if (would_warn[i].empty()) continue;
+    bool unsupported = false;
+    for (const auto& [first, last] : low_runs[i]) {
+      bool planted = false;
+      for (const Footplant& p : d.plants)
+        planted = planted || (same_foot(i, static_cast<std::size_t>(p.point)) && p.first_frame <= last &&
+                              p.last_frame >= first);
+      unsupported = unsupported || !planted;
+    }
+    if (unsupported) d.warnings.push_back(would_warn[i]);
   }
   return d;
 }

@@ -26,7 +26,8 @@ std::string frames_text(int first, int last) {
 // above the hips does not). The pelvis stays within centimetres of the centre of mass in flight,
 // where the mean of the joints does not: arms swung up raise it (CMU 13_13's jump: 7.4 m/s² from
 // the mean of the joints, 9.5 from the hips).
-std::vector<double> pelvis_heights(const Eigen::MatrixXd& world, const Skeleton& skeleton, std::string& name) {
+std::vector<double> pelvis_heights(const Eigen::MatrixXd& world, const Skeleton& skeleton,
+                                   std::string& name) {
   int best = 0;
   double best_range = -1;
   for (int j = 0; j < skeleton.joint_count(); ++j) {
@@ -73,7 +74,8 @@ std::vector<std::pair<int, int>> airborne_runs(const FootplantDetection& d, cons
   auto airborne = [&](int f) {
     if (planted[static_cast<std::size_t>(f)]) return false;
     for (const PlantPoint& p : d.points)
-      if (p.heights[static_cast<std::size_t>(f)] - p.rest_levels[static_cast<std::size_t>(f)] <= lift) return false;
+      if (p.heights[static_cast<std::size_t>(f)] - p.rest_levels[static_cast<std::size_t>(f)] <= lift)
+        return false;
     return true;
   };
   std::vector<std::pair<int, int>> runs;
@@ -100,16 +102,19 @@ void check_rate(MotionInspection& out) {
     }
   out.source_fps = out.header_fps;
   if (weight == 0) {
-    out.rate_evidence = "rate " + g3(out.header_fps) +
-                        " fps as read: no flight to weigh it against gravity (a free fall whose pelvis rises " +
-                        g3(100 * kMinFlightRise) + " cm or more, a parabola within " + g3(100 * kMaxFlightResidual) + "% of that)";
+    out.rate_evidence =
+        "rate " + g3(out.header_fps) +
+        " fps as read: no flight to weigh it against gravity (a free fall whose pelvis rises " +
+        g3(100 * kMinFlightRise) + " cm or more, a parabola within " + g3(100 * kMaxFlightResidual) +
+        "% of that)";
     return;
   }
   const double g = weighted / weight;
   const std::string shown = "the flights' pelvis (" + out.pelvis + ") falls at " + g3(g) + " m/s^2 at " +
                             g3(out.header_fps) + " fps";
   if (!(g > 0)) {
-    out.rate_evidence = shown + ", not downwards: the rate is not checked (contacts misread, or no free flight)";
+    out.rate_evidence =
+        shown + ", not downwards: the rate is not checked (contacts misread, or no free flight)";
     return;
   }
   const double factor = std::sqrt(kEarthGravity / g);
@@ -117,9 +122,10 @@ void check_rate(MotionInspection& out) {
   for (const double c : kRateFactors)
     if (std::abs(std::log(factor / c)) < std::abs(std::log(factor / best))) best = c;
   if (std::abs(factor / best - 1) > kRateTolerance) {
-    out.rate_evidence = shown + ": no whole factor of the rate gives " + g3(kEarthGravity) +
-                        " m/s^2 (it would take " + g3(factor) + "x), so " + g3(out.header_fps) +
-                        " fps is kept; the flights may be no free fall (a wire, a trampoline, misread contacts)";
+    out.rate_evidence =
+        shown + ": no whole factor of the rate gives " + g3(kEarthGravity) + " m/s^2 (it would take " +
+        g3(factor) + "x), so " + g3(out.header_fps) +
+        " fps is kept; the flights may be no free fall (a wire, a trampoline, misread contacts)";
     return;
   }
   if (best == 1) {
@@ -143,10 +149,10 @@ void find_pops(const Eigen::MatrixXd& world, const Skeleton& skeleton, double fp
     auto& a = acceleration[static_cast<std::size_t>(j)];
     a.resize(static_cast<std::size_t>(frames - 2));
     for (Eigen::Index f = 1; f + 1 < frames; ++f)
-      a[static_cast<std::size_t>(f - 1)] =
-          (world.block<1, 3>(f + 1, 3 * j) - 2 * world.block<1, 3>(f, 3 * j) + world.block<1, 3>(f - 1, 3 * j))
-              .norm() *
-          fps * fps;
+      a[static_cast<std::size_t>(f - 1)] = (world.block<1, 3>(f + 1, 3 * j) -
+                                            2 * world.block<1, 3>(f, 3 * j) + world.block<1, 3>(f - 1, 3 * j))
+                                               .norm() *
+                                           fps * fps;
   }
   std::vector<double> typical_of(static_cast<std::size_t>(joints));
   for (Eigen::Index j = 0; j < joints; ++j)
@@ -175,7 +181,8 @@ void summarise(MotionInspection& out, const Motion& motion) {
   s.push_back(out.clip + ": " + std::to_string(out.joints.size()) + " joints (" + std::to_string(roots) +
               (roots == 1 ? " root" : " roots") + "), " + std::to_string(motion.skeleton->channel_count()) +
               " channels; " + std::to_string(out.frames) + " frames at " + g3(out.header_fps) + " fps (" +
-              g3((out.frames - 1) / out.source_fps) + " s at the rate believed, " + g3(out.source_fps) + " fps)");
+              g3((out.frames - 1) / out.source_fps) + " s at the rate believed, " + g3(out.source_fps) +
+              " fps)");
   s.push_back("up: " + out.up + " (file axis); length unit: " + g3(out.unit_metres) + " m per file unit");
   s.push_back("rate: " + out.rate_evidence);
   s.push_back("calibration: " + out.calibration.evidence);
@@ -201,8 +208,8 @@ void summarise(MotionInspection& out, const Motion& motion) {
     for (std::size_t i = 0; i < out.pops.size() && i < 5; ++i)
       list += (i ? ", " : "") + std::to_string(out.pops[i].frame) + " (" + out.pops[i].joint + " " +
               g3(out.pops[i].acceleration) + " m/s^2)";
-    s.push_back("pops: " + std::to_string(out.pops.size()) + " frames where a joint's velocity jumps: " + list +
-                (out.pops.size() > 5 ? ", ..." : ""));
+    s.push_back("pops: " + std::to_string(out.pops.size()) +
+                " frames where a joint's velocity jumps: " + list + (out.pops.size() > 5 ? ", ..." : ""));
   }
   s.push_back(out.fixes.empty() ? "fixes: none needed" : "fixes: " + text::join(out.fixes, " "));
 }
@@ -237,7 +244,9 @@ MotionInspection inspect_motion(const Motion& motion, const InspectOptions& opti
   out.header_fps = motion.fps;
   out.unit_metres = skeleton.source_unit_metres;
   const Eigen::Matrix3d z_up = (Eigen::Matrix3d() << 1, 0, 0, 0, 0, 1, 0, -1, 0).finished();
-  out.up = skeleton.file_to_world.isIdentity(1e-9) ? "y" : skeleton.file_to_world.isApprox(z_up, 1e-9) ? "z" : "custom";
+  out.up = skeleton.file_to_world.isIdentity(1e-9)       ? "y"
+           : skeleton.file_to_world.isApprox(z_up, 1e-9) ? "z"
+                                                         : "custom";
 
   out.calibration = detect_calibration_frames(motion);
   for (int f = 0; f < out.calibration.frames; ++f) out.calibration_frames.push_back(f);

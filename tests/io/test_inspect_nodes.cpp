@@ -15,6 +15,7 @@
 #include "kg/base/text.hpp"
 #include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
+#include "kg/io/motion_format.hpp"
 #include "kg/motion/inspect.hpp"
 #include "test_bvh_data.hpp"
 
@@ -107,9 +108,10 @@ TEST_CASE("inspect: the JSON has the fields scripts read", "[io][inspect][data]"
     kg::motion::write_inspection_json(w, i, "cm");
   }
   const std::string text = report.text();
-  for (const char* key : {"\"up\": \"y\"", "\"units\": \"cm\"", "\"source_fps\": 120.0", "\"header_fps\": 120.0",
-                          "\"calibration_frames\": [", "\"plants\": [", "\"flights\": [", "\"gravity\": ",
-                          "\"fixes\": [", "\"--set trim=5..\"", "\"pops\": [", "\"penetration\": {"})
+  for (const char* key :
+       {"\"up\": \"y\"", "\"units\": \"cm\"", "\"source_fps\": 120.0", "\"header_fps\": 120.0",
+        "\"calibration_frames\": [", "\"plants\": [", "\"flights\": [", "\"gravity\": ", "\"fixes\": [",
+        "\"--set trim=5..\"", "\"pops\": [", "\"penetration\": {"})
     CHECK_THAT(text, Catch::Contains(key));
   CHECK(report.strings("fixes") == std::vector<std::string>{"--set trim=5.."});
   CHECK(report.strings("summary") == i.summary);
@@ -122,4 +124,35 @@ TEST_CASE("inspect refuses a clip too short and bad options", "[io][inspect]") {
   bad = {};
   bad.min_flight_frames = 2;
   CHECK_THROWS_WITH(bad.validate(), Catch::Contains("min_flight_frames"));
+}
+
+TEST_CASE("inspect: runs get plants at their own speed; an ankle rolling over its planted toe is no warning",
+          "[io][inspect][data]") {
+  // games105's run_forward at 60 Hz: every point's stance rolls faster than a walk's 0.15 m/s;
+  // the threshold is 6% of each point's 90th-percentile speed (0.35 to 0.45 m/s there).
+  const auto run = read("other_skeletons/games105/run_forward.bvh");
+  if (!run) {
+    WARN("skipped: run_forward.bvh not in " KG_DATA_DIR);
+    return;
+  }
+  const MotionInspection i = inspect_motion(*run);
+  INFO(kg::text::join(i.summary, "\n"));
+  for (const auto& p : i.plants) CHECK(p.spans.size() >= 1);
+  // The same run without the relative threshold: no plant on at least one point, and a warning.
+  kg::motion::InspectOptions fixed;
+  fixed.plants.speed_relative = 0;
+  const MotionInspection slow = inspect_motion(*run, fixed);
+  int without = 0;
+  for (const auto& p : slow.plants) without += p.spans.empty();
+  CHECK(without >= 1);
+  // CMU 09_06 (a run, ASF/AMC): the toes are planted; the ankles roll over them and are not
+  // warned of at those steps.
+  const auto amc = std::filesystem::path(KG_DATA_DIR) / "cmu/asf_amc/09_06.amc";
+  if (!std::filesystem::exists(amc)) return;
+  const MotionInspection cmu =
+      inspect_motion(kg::io::import_motion(amc.string(), "", ImportOptions{.trim = "none"}).motion);
+  INFO(kg::text::join(cmu.summary, "\n"));
+  CHECK(cmu.plants[1].spans.size() >= 1);  // ltoes/end
+  for (const std::string& note : cmu.plant_notes)
+    CHECK(note.find("lfoot gets no plant") == std::string::npos);
 }

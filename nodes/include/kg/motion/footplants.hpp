@@ -5,8 +5,9 @@
 //
 // Detection, per point: height above the floor h(f) and horizontal speed v(f) (central
 // differences over +-k frames, k = max(1, round(fps / 60)), metres per second). A plant starts
-// where h <= height_threshold and v <= speed_threshold, and lasts while h <= height_threshold *
-// hysteresis and v <= speed_threshold * hysteresis; the span's end frames farther than
+// where h <= height_threshold and v <= the point's speed threshold (speed_threshold, or
+// speed_relative times its 90th-percentile speed when more), and lasts while h <= height_threshold *
+// hysteresis and v <= that threshold * hysteresis; the span's end frames farther than
 // trim_distance from its median position are trimmed off (the roll into and out of a plant),
 // and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest
 // level (an ankle rests 7-10 cm above a toe tip): its lowest height within `rest_window_s` around the frame
@@ -38,9 +39,12 @@ struct FootplantOptions {
   std::vector<std::string> points{};
   double height_threshold = 0.03;  // m above the point's rest level to enter a plant
   double speed_threshold = 0.15;   // m/s horizontal to enter a plant
-  double hysteresis = 1.5;         // leave thresholds = enter thresholds * hysteresis (>= 1)
-  double min_duration_s = 0.08;    // shorter spans are dropped
-  int min_duration_frames = 3;     // and spans of fewer frames than this
+  // ... or this share of the point's own 90th-percentile horizontal speed when that is more, so
+  // that runs get plants: their stance rolls faster than a walk's (0: speed_threshold alone).
+  double speed_relative = 0.06;
+  double hysteresis = 1.5;       // leave thresholds = enter thresholds * hysteresis (>= 1)
+  double min_duration_s = 0.08;  // shorter spans are dropped
+  int min_duration_frames = 3;   // and spans of fewer frames than this
   double floor = std::numeric_limits<double>::quiet_NaN();  // m; NaN: estimated
   double floor_percentile = 0.05;                           // in [0, 0.5]
   // With a given floor, every point's rest level is the floor itself instead of its own low
@@ -81,8 +85,10 @@ struct FootplantDetection {
   double floor = 0;                // m, world height of the floor (given or estimated)
   bool floor_estimated = false;    // floor was not given
   std::vector<std::string> notes;  // which points were chosen, floor estimate
-  // Points that touch the floor but get no plant: one line each with the numbers (how long the
-  // point stays within height_threshold of its rest level, and how fast it moves there).
+  // Points that touch the floor but get no plant, while no other point of their foot (a joint
+  // above or below theirs) is planted: one line each with the numbers (how long the point stays
+  // within height_threshold of its rest level, and how fast it moves there). A run's ankle rolls
+  // over its planted toe and is not warned of.
   std::vector<std::string> warnings;
   int count(int point) const;  // plants of one point
 };

@@ -81,8 +81,8 @@ struct MotionInspection {
   double header_fps = 0;  // the clip's rate as read (its file's, or the importer's default)
   double source_fps = 0;  // the rate believed: header_fps, or what its flights' gravity implies
   std::string rate_evidence;
-  std::string pelvis;  // the joint whose flight heights are fitted
-  std::string up;     // "y", "z" or "custom": the file axis taken as up
+  std::string pelvis;      // the joint whose flight heights are fitted
+  std::string up;          // "y", "z" or "custom": the file axis taken as up
   double unit_metres = 1;  // the file's length unit, in metres
   CalibrationCut calibration;
   std::vector<int> calibration_frames;  // 0 .. calibration.frames - 1
