@@ -27,7 +27,8 @@ build_packages=(g++ cmake ninja-build pkg-config libeigen3-dev libceres-dev libg
 test_packages=(liborocos-kdl-dev  # KDL: reference inverse dynamics for test_retime and bench_retime
                slurmctld slurmd slurm-client munge  # test_cli's single-node Slurm cluster
                clang-format  # the "format" test: every source as clang-format 14 writes it
-               graphviz)     # the "readme" test: the README's `kinegraph dot ... | dot -Tpng`
+               graphviz      # the "readme" test: the README's `kinegraph dot ... | dot -Tpng`
+               jq)           # the "corpus" test (bench/corpus.sh reads the reports)
 [[ ${KG_SKIP_BLENDER:-0} == 1 ]] || test_packages+=(blender)
 sanitize_packages=(clang-14 libclang-rt-14-dev  # the compiler, its sanitizer and libFuzzer runtimes
                    llvm-14)                     # llvm-symbolizer: findings with file:line stacks
@@ -52,14 +53,14 @@ build() {
 
 # The sanitizer build: every finding fatal, with a stack of file:line (llvm-symbolizer). The
 # benchmarks are not built (their figures mean nothing under sanitizers), and `format`,
-# `test_sdk` and `readme` (source layout, installation and the README's text, the same in both
-# builds) run in the first only.
+# `test_sdk`, `readme` and `corpus` (source layout, installation, the README's text and the
+# sweep's verdicts over the CLI the other tests run, the same in both builds) run in the first only.
 sanitize_test() {
   CC=clang-14 CXX=clang++-14 cmake -S . -B "$sanitize_dir" -G Ninja -DCMAKE_BUILD_TYPE=Release \
     -DKG_SANITIZE=ON -DKG_FUZZ=ON -DKG_BUILD_BENCH=OFF -DKG_FUZZ_SECONDS="${KG_FUZZ_SECONDS:-20}"
   cmake --build "$sanitize_dir" -j "$jobs"
   export ASAN_SYMBOLIZER_PATH=/usr/bin/llvm-symbolizer-14
-  (cd "$sanitize_dir" && ctest --output-on-failure -j "$jobs" --timeout 900 -E '^(format|test_sdk|readme)$')
+  (cd "$sanitize_dir" && ctest --output-on-failure -j "$jobs" --timeout 900 -E '^(format|test_sdk|readme|corpus)$')
 }
 
 # install PREFIX: builds with PREFIX as the install prefix (so that GNUInstallDirs picks its

@@ -2,6 +2,7 @@
 #include "kg/base/option_check.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
@@ -117,10 +118,13 @@ std::vector<Pin> held_start(const TimeWarp& layout, const std::vector<Hold>& hol
   return playback;
 }
 
-// FlightTiming::Hold: each flight held at the speed the hulls' gravity gives, its middle where
-// `free` plays it. Empty, with `note` saying why, when no flight can be held so.
-std::vector<Hold> flight_holds(const Hulls& hulls, double fps, const TimeWarp& free, double& speed,
-                               std::string& note) {
+// Where a held flight starts in the output, given its source frames and held length (output s).
+using FlightPlacement = std::function<double(int first, int last, double length)>;
+
+// FlightTiming::Hold: each flight held at the speed the hulls' gravity gives, placed by `place`
+// over `duration` output seconds. Empty, with `note` saying why, when no flight can be held so.
+std::vector<Hold> flight_holds(const Hulls& hulls, double fps, double duration, const FlightPlacement& place,
+                               double& speed, std::string& note) {
   const auto runs = flight_runs(hulls);
   if (runs.empty()) {
     note = "no flight to hold (no two consecutive frames without contact)";
@@ -140,17 +144,16 @@ std::vector<Hold> flight_holds(const Hulls& hulls, double fps, const TimeWarp& f
     total += length;
     // A flight the clip starts or ends in starts or ends the output: the ends are kept.
     const int final_frame = static_cast<int>(hulls.frames.size()) - 1;
-    const double middle = output_time_of(free, (first + last) / (2 * fps));
     const double placed = first == 0            ? 0.0
-                          : last == final_frame ? free.duration - length
-                                                : middle - length / 2;
-    const double start = std::clamp(std::max(placed, end), 0.0, free.duration - length);
+                          : last == final_frame ? duration - length
+                                                : place(first, last, length);
+    const double start = std::clamp(std::max(placed, end), 0.0, duration - length);
     holds.push_back({source_start, start, length, speed});
     end = start + length;
   }
-  if (total >= free.duration) {
+  if (total >= duration) {
     note = "flights not held: at the speed gravity gives (" + fixed(speed) + "x) they alone last " +
-           fixed(total) + " s, not less than the " + fixed(free.duration) + " s requested";
+           fixed(total) + " s, not less than the " + fixed(duration) + " s requested";
     return {};
   }
   return holds;
@@ -207,14 +210,36 @@ std::vector<Hold> compatible_holds(std::vector<Hold> holds, double source_durati
 // an end, a pin or each other) are held on a knot spacing halved, twice at most, or left free.
 void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps, const RetimeOptions& solve,
                   ClipRetime& out) {
+  // Placed where the free solve plays each flight's middle (its ground phases took the time their
+  // hulls needed), else, when that holds fewer flights, between ground phases played at one speed.
+  const TimeWarp& free = out.solve.warp;
+  const FlightPlacement where_free = [&](int first, int last, double length) {
+    return output_time_of(free, (first + last) / (2 * fps)) - length / 2;
+  };
+  const auto runs = flight_runs(hulls);
+  const FlightPlacement even_ground = [&](int first, int, double) {
+    double flown = 0, flown_output = 0, flight_total = 0;  // source seconds in flight before `first`
+    const double k = std::sqrt(hulls.gravity.norm() / kCaptureGravity);
+    for (const auto& [a, b] : runs) flight_total += (b - a) / fps;
+    for (const auto& [a, b] : runs)
+      if (a < first) flown += (b - a) / fps, flown_output += (b - a) / fps / k;
+    const double ground_speed =
+        (objective.source_duration() - flight_total) / (solve.duration - flight_total / k);
+    return (first / fps - flown) / ground_speed + flown_output;
+  };
   double speed = 0;
-  const std::vector<Hold> all = flight_holds(hulls, fps, out.solve.warp, speed, out.flight_note);
-  if (all.empty()) return;
-  RetimeOptions held = solve, trial = solve;
-  std::string dropped, trial_dropped;
-  for (int attempt = 0; attempt < 3; ++attempt, trial.knot_spacing /= 2) {
-    trial.holds = compatible_holds(all, objective.source_duration(), trial, trial_dropped);
-    if (trial.holds.size() > held.holds.size()) held = trial, dropped = trial_dropped;
+  RetimeOptions held = solve;
+  std::string dropped;
+  for (const FlightPlacement* place : {&where_free, &even_ground}) {
+    const std::vector<Hold> all = flight_holds(hulls, fps, solve.duration, *place, speed, out.flight_note);
+    if (all.empty()) return;
+    RetimeOptions trial = solve;
+    std::string trial_dropped;
+    for (int attempt = 0; attempt < 3; ++attempt, trial.knot_spacing /= 2) {
+      trial.holds = compatible_holds(all, objective.source_duration(), trial, trial_dropped);
+      if (trial.holds.size() > held.holds.size()) held = trial, dropped = trial_dropped;
+      if (held.holds.size() == all.size()) break;
+    }
     if (held.holds.size() == all.size()) break;
   }
   if (held.holds.empty()) {
