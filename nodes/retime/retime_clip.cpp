@@ -2,8 +2,8 @@
 #include "kg/base/option_check.hpp"
 
 #include <algorithm>
-#include <functional>
 #include <cmath>
+#include <functional>
 #include <sstream>
 #include <stdexcept>
 
