@@ -56,7 +56,7 @@ graph::NodeType import_type(std::string type, std::string doc, std::vector<graph
   }
   graph::NodeSpec spec{
       .type = std::move(type),
-      .version = 2,  // 2: trim (calibration frames dropped by default)
+      .version = 3,  // 2: trim (calibration frames dropped by default); 3: fps auto
       .doc = std::move(doc),
       .outputs = {{"motion", "kg.Motion", true, "the clip: metres, radians, +Y up (skeleton.file_to_world)"},
                   {"skeleton", "kg.Skeleton", true, "its skeleton (the same object as motion.skeleton)"}},

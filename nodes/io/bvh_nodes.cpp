@@ -75,7 +75,7 @@ class ExportNode final : public graph::Node {
 graph::NodeSpec import_spec() {
   graph::NodeSpec spec{
       .type = "io.import_bvh",
-      .version = 2,  // 2: trim (calibration frames dropped by default)
+      .version = 3,  // 2: trim (calibration frames dropped by default); 3: fps auto
       .doc =
           "Reads a BVH file (strictly: a malformed file fails with file:line) and brings it to metres, "
           "radians and +Y up. Position channels replace the OFFSET components they name. units/up auto "

@@ -12,6 +12,7 @@
 #include <utility>
 
 #include "kg/motion/calibration.hpp"
+#include "kg/motion/inspect.hpp"
 #include "kg/motion/kinematics.hpp"
 
 namespace kg::io {
@@ -357,6 +358,22 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
     m.fps = options.fps;
   } else {
     m.fps = file_fps;
+  }
+  if (options.fps_from_flights && options.fps == 0 && m.frame_count() >= 3) {
+    // Before the calibration frames are judged: their step speeds are per second.
+    try {
+      const motion::RateCheck rate = motion::rate_from_flights(m);
+      if (rate.fps != m.fps) {
+        notes.push_back(prefix + "fps auto: " + rate.evidence + "; read at " + fmt("%g", rate.fps) +
+                        " fps (fps 0 keeps the file's)");
+        m.fps = rate.fps;
+      } else {
+        notes.push_back(prefix + "fps auto: " + rate.evidence);
+      }
+    } catch (const std::invalid_argument& e) {  // no foot points to tell flights by
+      notes.push_back(prefix + "fps auto: the file's " + fmt("%g", m.fps) +
+                      " fps kept, unchecked: " + e.what());
+    }
   }
 
   // Calibration frames, judged on the clip in metres at its rate.

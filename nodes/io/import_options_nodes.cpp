@@ -1,6 +1,10 @@
 // The import options as node params (kg/io/nodes.hpp).
 #include "kg/io/nodes.hpp"
 
+#include <cmath>
+
+#include "kg/base/text.hpp"
+
 namespace kg::io {
 
 std::vector<graph::ParamSpec> import_option_params(const std::string& default_units) {
@@ -19,10 +23,11 @@ std::vector<graph::ParamSpec> import_option_params(const std::string& default_un
        .doc = "file axis pointing up: auto (from frame 0's extents, said so), y, z (rotated to +Y)",
        .choices = {"auto", "y", "z"}},
       {.name = "fps",
-       .type = ParamType::Float,
-       .default_value = 0.0,
-       .doc = "frames per second overriding the file's (files lie); 0 keeps the file's",
-       .min = 0.0},
+       .type = ParamType::String,
+       .default_value = std::string("0"),
+       .doc = "frames per second overriding the file's (files lie); 0 keeps the file's; auto: the file's, "
+              "unless the clip's free-fall flights show it off by a whole factor (then the rate they "
+              "imply, said so)"},
       {.name = "trim",
        .type = ParamType::String,
        .default_value = std::string("auto"),
@@ -35,7 +40,16 @@ ImportOptions import_options_from(const graph::Params& params) {
   ImportOptions o;
   o.units = params.get<std::string>("units");
   o.up = params.get<std::string>("up");
-  o.fps = params.get<double>("fps");
+  const std::string fps = std::string(text::trim(params.get<std::string>("fps")));
+  if (fps == "auto") {
+    o.fps_from_flights = true;
+  } else {
+    const auto rate = text::parse_double(fps);
+    if (!rate || !(*rate >= 0) || !std::isfinite(*rate))
+      throw std::invalid_argument("fps " + text::in_quotes(fps) +
+                                  ": expected auto, 0 (the file's) or a rate > 0 (frames per second)");
+    o.fps = *rate;
+  }
   o.trim = params.get<std::string>("trim");
   o.validate();  // node factories call this: a bad setting fails when the graph loads
   return o;

@@ -64,18 +64,16 @@ Parabola fit_parabola(const std::vector<double>& y, int first, int last, double 
   return {g, g * T * T / 8, std::sqrt((A * x - b).squaredNorm() / n)};
 }
 
-// Runs of frames with every foot point off the floor and in no plant (analysed frame numbers).
+// Runs of frames with every foot point off the floor: above its clip-wide rest height (the
+// floor_percentile of its heights) by more than a plant's leave threshold. Heights only, so that
+// the runs are the same at any frame rate: plants and their rest window are per second, and a
+// header that lies about the rate would find plants in mid-air.
 std::vector<std::pair<int, int>> airborne_runs(const FootplantDetection& d, const FootplantOptions& o,
                                                int frames) {
-  std::vector<char> planted(static_cast<std::size_t>(frames), 0);
-  for (const Footplant& p : d.plants)
-    for (int f = p.first_frame; f <= p.last_frame; ++f) planted[static_cast<std::size_t>(f)] = 1;
-  const double lift = o.height_threshold * o.hysteresis;  // a plant's leave threshold
+  const double lift = o.height_threshold * o.hysteresis;
   auto airborne = [&](int f) {
-    if (planted[static_cast<std::size_t>(f)]) return false;
     for (const PlantPoint& p : d.points)
-      if (p.heights[static_cast<std::size_t>(f)] - p.rest_levels[static_cast<std::size_t>(f)] <= lift)
-        return false;
+      if (p.heights[static_cast<std::size_t>(f)] - p.rest_height <= lift) return false;
     return true;
   };
   std::vector<std::pair<int, int>> runs;
@@ -297,6 +295,11 @@ MotionInspection inspect_motion(const Motion& motion, const InspectOptions& opti
   find_pops(world, skeleton, motion.fps, offset, options, out);
   summarise(out, motion);
   return out;
+}
+
+RateCheck rate_from_flights(const Motion& motion, const InspectOptions& options) {
+  const MotionInspection i = inspect_motion(motion, options);
+  return {i.source_fps, i.rate_evidence};
 }
 
 void write_inspection_json(JsonWriter& w, const MotionInspection& i, const std::string& units) {

@@ -93,20 +93,35 @@ TEST_CASE("import options: unit factors, names, params") {
   CHECK(params[1].name == "up");
   CHECK(params[1].choices == std::vector<std::string>{"auto", "y", "z"});
   CHECK(params[2].name == "fps");
-  CHECK(params[2].type == kg::graph::ParamType::Float);
-  CHECK(std::get<double>(params[2].default_value) == 0.0);
-  CHECK(params[2].min == 0.0);
+  CHECK(params[2].type == kg::graph::ParamType::String);  // a rate, 0 or auto
+  CHECK(std::get<std::string>(params[2].default_value) == "0");
   CHECK(params[3].name == "trim");
   CHECK(std::get<std::string>(params[3].default_value) == "auto");
   CHECK_THROWS_AS(kg::io::import_option_params("furlong"), std::invalid_argument);
 
-  kg::graph::Params p(
-      {{"units", std::string("cm")}, {"up", std::string("z")}, {"fps", 120.0}, {"trim", std::string("3..")}});
+  kg::graph::Params p({{"units", std::string("cm")},
+                       {"up", std::string("z")},
+                       {"fps", std::string("120")},
+                       {"trim", std::string("3..")}});
   ImportOptions o = kg::io::import_options_from(p);
   CHECK(o.units == "cm");
   CHECK(o.up == "z");
   CHECK(o.fps == 120.0);
+  CHECK_FALSE(o.fps_from_flights);
   CHECK(o.trim == "3..");
+  kg::graph::Params automatic({{"units", std::string("auto")},
+                               {"up", std::string("auto")},
+                               {"fps", std::string("auto")},
+                               {"trim", std::string("auto")}});
+  CHECK(kg::io::import_options_from(automatic).fps_from_flights);
+  CHECK(kg::io::import_options_from(automatic).fps == 0);
+  for (const char* bad : {"-1", "fast", "inf"}) {
+    kg::graph::Params wrong({{"units", std::string("auto")},
+                             {"up", std::string("auto")},
+                             {"fps", std::string(bad)},
+                             {"trim", std::string("auto")}});
+    CHECK_THROWS_WITH(kg::io::import_options_from(wrong), Catch::Contains(bad) && Catch::Contains("auto"));
+  }
 }
 
 TEST_CASE("import options: bad options are refused") {

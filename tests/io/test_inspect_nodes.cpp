@@ -6,10 +6,13 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <vector>
 
+#include "../support/temp_dir.hpp"
 #include "kg/base/json.hpp"
 #include "kg/base/report.hpp"
 #include "kg/base/text.hpp"
@@ -155,4 +158,35 @@ TEST_CASE("inspect: runs get plants at their own speed; an ankle rolling over it
   CHECK(cmu.plants[1].spans.size() >= 1);  // ltoes/end
   for (const std::string& note : cmu.plant_notes)
     CHECK(note.find("lfoot gets no plant") == std::string::npos);
+}
+
+TEST_CASE("source_fps auto: a header that lies by a whole factor is read at the rate the jump shows",
+          "[io][inspect][data]") {
+  // The jumps' files with their Frame Time rewritten to other whole factors of the truth (120 Hz).
+  const kg::test::TempDir dir;
+  for (const char* relative : {"cmu/bvh_daz/13_11.bvh", "cmu/bvh_cmu_names/16_01.bvh"}) {
+    const std::filesystem::path path = std::filesystem::path(KG_DATA_DIR) / relative;
+    if (!std::filesystem::exists(path)) {
+      WARN("skipped: " << relative << " not in " KG_DATA_DIR);
+      return;
+    }
+    std::ifstream in(path);
+    std::stringstream text;
+    text << in.rdbuf();
+    const std::string original = text.str();
+    const auto at = original.find("Frame Time:");
+    REQUIRE(at != std::string::npos);
+    const auto end = original.find('\n', at);
+    for (const double lie : {30.0, 60.0, 120.0, 240.0}) {
+      const std::filesystem::path file = dir / (std::filesystem::path(relative).stem().string() + "_" +
+                                                std::to_string(static_cast<int>(lie)) + ".bvh");
+      std::ofstream(file) << original.substr(0, at) << "Frame Time: " << 1.0 / lie << original.substr(end);
+      const kg::io::ImportedMotion read = kg::io::import_bvh(file, ImportOptions{.fps_from_flights = true});
+      INFO(relative << " stated at " << lie << " fps: " << kg::text::join(read.notes, "\n"));
+      CHECK(read.motion.fps == Approx(120.0));
+      // The fps override still wins, and fps 0 without auto keeps the header.
+      CHECK(kg::io::import_bvh(file, ImportOptions{.fps = 50}).motion.fps == 50.0);
+      CHECK(kg::io::import_bvh(file, ImportOptions{}).motion.fps == Approx(lie));
+    }
+  }
 }

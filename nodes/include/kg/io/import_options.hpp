@@ -25,6 +25,10 @@ struct ImportOptions {
   std::string up = "auto";
   // Frames per second overriding the file's header; 0 keeps the file's.
   double fps = 0;
+  // With fps 0: the rate the clip's free-fall flights imply when it is the header's times a
+  // whole factor (motion::rate_from_flights, kg/motion/inspect.hpp), said in a note either way;
+  // the header's otherwise. A graph's `source_fps: auto`.
+  bool fps_from_flights = false;
   // auto | none | FIRST..LAST | FIRST.. (frame numbers of the file, from 0, inclusive): the
   // frames kept. auto drops calibration frames (a T-pose or A-pose before the motion starts:
   // motion::detect_calibration_frames, kg/motion/calibration.hpp) and says so either way.
@@ -74,7 +78,8 @@ bool known_unit(const std::string& units);
 //     root (iClone's Z-up rig under a -90 deg root) or orient bones along X (Bandai): the posed
 //     figure is what a viewer shows; a median, because a single pose (arms reaching forward)
 //     can be as deep as it is tall.
-//   - fps: options.fps when > 0, else file_fps (which must then be > 0).
+//   - fps: options.fps when > 0, else file_fps (which must then be > 0); with fps_from_flights,
+//     then what the flights imply (before trim: calibration speeds are per second).
 //   - trim (last, on the converted clip): auto drops the frames detect_calibration_frames
 //     finds; FIRST..LAST keeps those frames (LAST past the clip is an error naming the clip's
 //     frame count); none keeps all. Frame numbers in later files (constraints, contacts) count

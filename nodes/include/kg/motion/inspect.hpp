@@ -102,6 +102,14 @@ struct MotionInspection {
 // message of detect_footplants) or options out of range.
 MotionInspection inspect_motion(const Motion& motion, const InspectOptions& options = {});
 
+// The rate a clip's free-fall flights imply, and the evidence: inspect_motion's source_fps and
+// rate_evidence (the header's rate when no flight weighs it). What `source_fps: auto` applies.
+struct RateCheck {
+  double fps = 0;
+  std::string evidence;
+};
+RateCheck rate_from_flights(const Motion& motion, const InspectOptions& options = {});
+
 // The inspection as one JSON object: clip, joints, frames, header_fps, source_fps, duration_s,
 // up, units (`units`: the caller's name of unit_metres, e.g. io::unit_name), calibration_frames,
 // plants, flights (each with its gravity), floor_m, penetration, pops, fixes, summary.
