@@ -137,11 +137,17 @@ std::vector<Hold> flight_holds(const Hulls& hulls, double fps, double duration, 
     return {};
   }
   speed = std::sqrt(g.norm() / kCaptureGravity);
+  double total = 0;
+  for (const auto& [first, last] : runs) total += (last - first) / fps / speed;
+  if (total >= duration) {
+    note = "flights not held: at the speed gravity gives (" + fixed(speed) + "x) they alone last " +
+           fixed(total) + " s, not less than the " + fixed(duration) + " s requested";
+    return {};
+  }
   std::vector<Hold> holds;
-  double total = 0, end = 0;
+  double end = 0;
   for (const auto& [first, last] : runs) {
     const double source_start = first / fps, length = (last - first) / fps / speed;
-    total += length;
     // A flight the clip starts or ends in starts or ends the output: the ends are kept.
     const int final_frame = static_cast<int>(hulls.frames.size()) - 1;
     const double placed = first == 0            ? 0.0
@@ -150,11 +156,6 @@ std::vector<Hold> flight_holds(const Hulls& hulls, double fps, double duration, 
     const double start = std::clamp(std::max(placed, end), 0.0, duration - length);
     holds.push_back({source_start, start, length, speed});
     end = start + length;
-  }
-  if (total >= duration) {
-    note = "flights not held: at the speed gravity gives (" + fixed(speed) + "x) they alone last " +
-           fixed(total) + " s, not less than the " + fixed(duration) + " s requested";
-    return {};
   }
   return holds;
 }
@@ -225,11 +226,13 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
       if (a < first) flown += (b - a) / fps, flown_output += (b - a) / fps / k;
     const double ground_speed =
         (objective.source_duration() - flight_total) / (solve.duration - flight_total / k);
+    if (!(ground_speed > 0) || !std::isfinite(ground_speed)) return where_free(first, first, 0);
     return (first / fps - flown) / ground_speed + flown_output;
   };
   double speed = 0;
   RetimeOptions held = solve;
   std::string dropped;
+  const char* placement = "";
   for (const FlightPlacement* place : {&where_free, &even_ground}) {
     const std::vector<Hold> all = flight_holds(hulls, fps, solve.duration, *place, speed, out.flight_note);
     if (all.empty()) return;
@@ -237,7 +240,12 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
     std::string trial_dropped;
     for (int attempt = 0; attempt < 3; ++attempt, trial.knot_spacing /= 2) {
       trial.holds = compatible_holds(all, objective.source_duration(), trial, trial_dropped);
-      if (trial.holds.size() > held.holds.size()) held = trial, dropped = trial_dropped;
+      if (trial.holds.size() > held.holds.size()) {
+        held = trial;
+        dropped = trial_dropped;
+        placement =
+            place == &where_free ? "where the free solve played " : "between ground phases played evenly: ";
+      }
       if (held.holds.size() == all.size()) break;
     }
     if (held.holds.size() == all.size()) break;
@@ -258,12 +266,10 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
   out.held_speed = speed;
   double held_time = 0;
   for (const Hold& h : held.holds) held_time += h.length;
-  out.flight_note =
-      std::to_string(held.holds.size()) + (held.holds.size() == 1 ? " flight" : " flights") + " held (" +
-      fixed(held_time) + " s of output at " + fixed(speed) +
-      "x source speed, p'' = 0: ballistic under the hulls' gravity, placed where the free solve "
-      "played " +
-      (held.holds.size() == 1 ? "it" : "them") + ")";
+  out.flight_note = std::to_string(held.holds.size()) + (held.holds.size() == 1 ? " flight" : " flights") +
+                    " held (" + fixed(held_time) + " s of output at " + fixed(speed) +
+                    "x source speed, p'' = 0: ballistic under the hulls' gravity, placed " + placement +
+                    (held.holds.size() == 1 ? "it" : "them") + ")";
   if (held.knot_spacing != solve.knot_spacing)
     out.flight_note += ", knot spacing " + fixed(held.knot_spacing) + " s";
   if (!dropped.empty())
