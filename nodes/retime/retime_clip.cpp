@@ -244,7 +244,7 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
         held = trial;
         dropped = trial_dropped;
         placement =
-            place == &where_free ? "where the free solve played " : "between ground phases played evenly: ";
+            place == &where_free ? "where the free solve played them" : "between evenly played ground phases";
       }
       if (held.holds.size() == all.size()) break;
     }
@@ -268,8 +268,7 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
   for (const Hold& h : held.holds) held_time += h.length;
   out.flight_note = std::to_string(held.holds.size()) + (held.holds.size() == 1 ? " flight" : " flights") +
                     " held (" + fixed(held_time) + " s of output at " + fixed(speed) +
-                    "x source speed, p'' = 0: ballistic under the hulls' gravity, placed " + placement +
-                    (held.holds.size() == 1 ? "it" : "them") + ")";
+                    "x source speed, p'' = 0: ballistic under the hulls' gravity, placed " + placement + ")";
   if (held.knot_spacing != solve.knot_spacing)
     out.flight_note += ", knot spacing " + fixed(held.knot_spacing) + " s";
   if (!dropped.empty())
