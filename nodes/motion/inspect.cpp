@@ -252,31 +252,12 @@ MotionInspection inspect_motion(const Motion& motion, const InspectOptions& opti
   if (offset > 0) out.fixes.push_back("--set trim=" + std::to_string(offset) + "..");
   const Motion analysed = offset > 0 ? frame_range(motion, offset) : motion;
 
-  const FootplantDetection plants = detect_footplants(analysed, options.plants);
-  out.floor = plants.floor;
-  out.plant_notes = plants.notes;
-  out.plant_notes.insert(out.plant_notes.end(), plants.warnings.begin(), plants.warnings.end());
-  for (std::size_t i = 0; i < plants.points.size(); ++i) {
-    PointPlants p{plants.points[i].name, {}, 0};
-    for (const Footplant& plant : plants.plants)
-      if (plant.point == static_cast<int>(i)) {
-        p.spans.push_back({plant.first_frame + offset, plant.last_frame + offset});
-        p.worst_skate = std::max(p.worst_skate, plant.skate);
-      }
-    out.plants.push_back(std::move(p));
-    const std::vector<double>& h = plants.points[i].heights;
-    for (std::size_t f = 0; f < h.size(); ++f)
-      if (plants.floor - h[f] > out.penetration) {
-        out.penetration = plants.floor - h[f];
-        out.penetration_frame = static_cast<int>(f) + offset;
-        out.penetration_point = plants.points[i].name;
-      }
-  }
-
+  // Flights first, from heights alone (the same at any rate): they tell the rate, at which the
+  // plants (thresholds per second, rest levels over a window of seconds) are then found.
+  const FootplantDetection at_header = detect_footplants(analysed, options.plants);
   const Eigen::MatrixXd world = joint_world_positions(analysed);
   const std::vector<double> centre = pelvis_heights(world, skeleton, out.pelvis);
-  std::vector<double> header_gravity;
-  for (const auto& [first, last] : airborne_runs(plants, options.plants, analysed.frame_count())) {
+  for (const auto& [first, last] : airborne_runs(at_header, options.plants, analysed.frame_count())) {
     FlightSpan f{first + offset, last + offset, 0, std::nullopt};
     if (last - first + 1 >= options.min_flight_frames) {
       const Parabola p = fit_parabola(centre, first, last, motion.fps);
@@ -287,12 +268,45 @@ MotionInspection inspect_motion(const Motion& motion, const InspectOptions& opti
     out.flights.push_back(f);
   }
   check_rate(out);
+  Motion at_rate = analysed;
+  at_rate.fps = out.source_fps;
+  const FootplantDetection plants =
+      out.source_fps == out.header_fps ? at_header : detect_footplants(at_rate, options.plants);
+
+  out.floor = plants.floor;
+  out.plant_notes = plants.notes;
+  out.plant_notes.insert(out.plant_notes.end(), plants.warnings.begin(), plants.warnings.end());
+  std::vector<char> planted(static_cast<std::size_t>(analysed.frame_count()), 0);
+  for (std::size_t i = 0; i < plants.points.size(); ++i) {
+    PointPlants p{plants.points[i].name, {}, 0};
+    for (const Footplant& plant : plants.plants)
+      if (plant.point == static_cast<int>(i)) {
+        p.spans.push_back({plant.first_frame + offset, plant.last_frame + offset});
+        p.worst_skate = std::max(p.worst_skate, plant.skate);
+        for (int f = plant.first_frame; f <= plant.last_frame; ++f) planted[static_cast<std::size_t>(f)] = 1;
+      }
+    out.plants.push_back(std::move(p));
+    const std::vector<double>& h = plants.points[i].heights;
+    for (std::size_t f = 0; f < h.size(); ++f)
+      if (plants.floor - h[f] > out.penetration) {
+        out.penetration = plants.floor - h[f];
+        out.penetration_frame = static_cast<int>(f) + offset;
+        out.penetration_point = plants.points[i].name;
+      }
+  }
+  // Flights are what is off the floor and planted nowhere at the rate believed (a walk's feet
+  // both lift above their clip-wide low on a drifting floor, but one stays planted).
+  std::erase_if(out.flights, [&](const FlightSpan& f) {
+    for (int k = f.first; k <= f.last; ++k)
+      if (planted[static_cast<std::size_t>(k - offset)]) return true;
+    return false;
+  });
   const double factor = out.source_fps / out.header_fps;
   for (FlightSpan& f : out.flights) {
     f.seconds = (f.last - f.first) / out.source_fps;
     if (f.gravity) *f.gravity *= factor * factor;  // accelerations scale with the rate squared
   }
-  find_pops(world, skeleton, motion.fps, offset, options, out);
+  find_pops(world, skeleton, out.source_fps, offset, options, out);
   summarise(out, motion);
   return out;
 }

@@ -7,7 +7,9 @@
 //
 // Units: metres, seconds, m/s², world +Y up (skeleton.hpp). Frame numbers are the clip's, from
 // 0, calibration frames included: the analyses after the calibration check (plants, flights,
-// floor, pops) run on the frames after them and report the clip's numbers all the same.
+// floor, pops) run on the frames after them and report the clip's numbers all the same. The
+// flights that tell the rate are found from heights alone (the same at any rate); the plants,
+// the flights reported and the pops are then found at the rate believed.
 #pragma once
 
 #include <optional>
@@ -60,7 +62,7 @@ struct PointPlants {
 };
 
 struct FlightSpan {
-  int first = 0, last = 0;        // frames with every foot point off the floor
+  int first = 0, last = 0;        // frames with every foot point off the floor, none planted
   double seconds = 0;             // at the rate believed (source_fps)
   std::optional<double> gravity;  // m/s² at the rate believed: a parabola through the pelvis's
                                   // heights (min_flight_frames or more)
@@ -71,7 +73,7 @@ struct FlightSpan {
 struct Pop {
   int frame = 0;
   std::string joint;
-  double acceleration = 0;  // m/s² at the header's rate
+  double acceleration = 0;  // m/s² at the rate believed
 };
 
 struct MotionInspection {
