@@ -87,7 +87,7 @@ variables:
 nodes:
   source:
     type: io.import_motion
-    params: {path: "${input}", skeleton: "${skeleton}", units: "${units}", up: "${up}", fps: "${source_fps}", trim: none}
+    params: {path: "${input}", skeleton: "${skeleton}", units: "${units}", up: "${up}", fps: "${source_fps}", trim: "${trim}"}
   inspect: {type: motion.inspect}
 connections:
   - {from: source.motion, to: inspect.motion}

@@ -695,3 +695,19 @@ TEST_CASE("inspect: the motion doctor on a clip, as text and JSON; bad clips exi
     CHECK(kinegraph({"inspect", clip.string(), "--set", "input=x.bvh"}).code == 2);
   }
 }
+
+TEST_CASE("inspect: --set trim reads only those frames", "[cli]") {
+  const fs::path clip = fs::path(KG_DATA_DIR) / "cmu/bvh_daz/13_11.bvh";
+  if (!fs::exists(clip)) {
+    WARN("skipped: " << clip << " not found");
+    return;
+  }
+  const Result all = kinegraph({"inspect", clip.string(), "--json"});
+  const Result cut = kinegraph({"inspect", clip.string(), "--json", "--set", "trim=5.."});
+  INFO(show(all) << "\n" << show(cut));
+  REQUIRE(all.code == 0);
+  REQUIRE(cut.code == 0);
+  CHECK(YAML::Load(all.out)["calibration_frames"].size() == 5);
+  CHECK(YAML::Load(cut.out)["calibration_frames"].size() == 0);
+  CHECK(YAML::Load(cut.out)["frames"].as<int>() == YAML::Load(all.out)["frames"].as<int>() - 5);
+}
