@@ -202,6 +202,7 @@ KeySpacing choose_key_spacing(const motion::Motion& m, const KeySpacingOptions& 
   }
 
   KeySpacing out;
+  out.fps = m.fps;
   out.frames_per_key.assign(static_cast<std::size_t>(s.channel_count()), 0);
   std::ostringstream reason;
   for (std::size_t g = 0; g < choices.size(); ++g) {

@@ -253,7 +253,7 @@ BandEnergy energy_above(const Eigen::Ref<const Eigen::VectorXd>& signal, double 
 }
 
 AddedEnergy energy_above_cutoff(const Motion& result, const Motion& reference,
-                                const std::vector<int>& frames_per_key) {
+                                const std::vector<int>& frames_per_key, double keys_fps) {
   result.check();
   reference.check();
   check_same_layout(result, reference, "reference");
@@ -271,7 +271,7 @@ AddedEnergy energy_above_cutoff(const Motion& result, const Motion& reference,
   for (int c = 0; c < channels; ++c) {
     const int k =
         frames_per_key.size() == 1 ? frames_per_key[0] : frames_per_key[static_cast<std::size_t>(c)];
-    const double cutoff = key_cutoff_hz(result.fps, k);
+    const double cutoff = key_cutoff_hz(keys_fps > 0 ? keys_fps : result.fps, k);
     out.min_cutoff_hz = std::min(out.min_cutoff_hz, cutoff);
     out.max_cutoff_hz = std::max(out.max_cutoff_hz, cutoff);
     add_energy(channel_is_rotation(*result.skeleton, c) ? out.rotation : out.translation, coefficients.col(c),
@@ -336,6 +336,13 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
     out.kinds.push_back(km);
   }
   out.skate = foot_skate(*in.constraints, poses);
+  if (in.initial) {
+    check_same_layout(result, *in.initial, "initial");
+    std::vector<Motion> initial{*in.initial};
+    if (in.result2) initial.push_back(*in.result2);
+    const PoseCache initial_poses(initial, std::span(skeletons_at).first(initial.size()));
+    out.initial_skate = foot_skate(*in.constraints, initial_poses);
+  }
   out.jerk = rms_jerk(result);
   if (in.source) {
     out.source_jerk = rms_jerk(*in.source);
@@ -344,8 +351,8 @@ RetargetMetrics compute_metrics(const MetricsInputs& in) {
   const Motion* reference = in.initial ? in.initial : in.source;
   if (reference) {
     out.energy_reference = in.initial ? "initial" : "source";
-    out.energy = energy_above_cutoff(result, *reference,
-                                     in.frames_per_key.empty() ? std::vector<int>{4} : in.frames_per_key);
+    out.energy = energy_above_cutoff(
+        result, *reference, in.frames_per_key.empty() ? std::vector<int>{4} : in.frames_per_key, in.keys_fps);
   }
   out.solve_seconds = in.solve_seconds;
   return out;
@@ -401,6 +408,10 @@ void write_skate(kg::JsonWriter& w, const RetargetMetrics& m) {
   w.field("worst", 100 * m.skate.worst);
   w.field("mean", 100 * m.skate.mean);
   w.field("plants_count", m.skate.plants.size());
+  if (m.initial_skate) {
+    w.field("initial_worst", 100 * m.initial_skate->worst);
+    w.field("initial_mean", 100 * m.initial_skate->mean);
+  }
   w.key("plants");
   w.begin_array();
   for (const PlantSkate& p : m.skate.plants) {

@@ -31,9 +31,10 @@ class MetricsNode final : public graph::Node {
     if (ctx.has_input("source")) in.source = &ctx.input<motion::Motion>("source");
     if (ctx.has_input("initial")) in.initial = &ctx.input<motion::Motion>("initial");
     if (ctx.has_input("target")) in.target = &ctx.input<Target>("target");
-    if (ctx.has_input("keys"))
+    if (ctx.has_input("keys")) {
       in.frames_per_key = ctx.input<KeySpacing>("keys").frames_per_key;
-    else
+      in.keys_fps = ctx.input<KeySpacing>("keys").fps;
+    } else
       in.frames_per_key = {key_spacing_};
     if (ctx.has_input("solve_seconds")) in.solve_seconds = ctx.input<double>("solve_seconds");
     in.tolerance = tolerance_;
@@ -49,6 +50,7 @@ class MetricsNode final : public graph::Node {
     ctx.report("plants", static_cast<std::int64_t>(m.skate.plants.size()));
     ctx.report("skate_worst_cm", 100 * m.skate.worst);
     ctx.report("skate_mean_cm", 100 * m.skate.mean);
+    if (m.initial_skate) ctx.report("initial_skate_worst_cm", 100 * m.initial_skate->worst);
     ctx.report("jerk_translation", m.jerk.translation);
     ctx.report("jerk_rotation", m.jerk.rotation);
     if (m.source_jerk) {
@@ -85,7 +87,8 @@ graph::NodeType metrics_node_type() {
           "io.write_report): worst and mean "
           "violation per constraint kind (cm for point kinds), foot skate (greatest horizontal "
           "travel of each planted point of position/same_place constraints during its run of "
-          "frames, cm), RMS jerk of position (m/s^3) and rotation (rad/s^3) channels, of the "
+          "frames, cm; beside it the initial estimate's, when wired: the scaled source's own), RMS jerk of "
+          "position (m/s^3) and rotation (rad/s^3) channels, of the "
           "source and of the displacement from it, the fraction of the displacement's energy "
           "above the key spacing's cut-off fps / (2 k) (DCT of each channel; displacement from "
           "`initial` when wired, else from `source`), and the solve time when wired.",
@@ -97,7 +100,8 @@ graph::NodeType metrics_node_type() {
                   "the second character's result, for constraints across characters"},
                  {"target", "kg.Target", false,
                   "the target character: a morphing one gives each frame its skeleton"},
-                 {"keys", "kg.KeySpacing", false, "the key spacing of the solve (else key_spacing)"},
+                 {"keys", "kg.KeySpacing", false,
+                  "the key spacing of the solve (else key_spacing), at the solve's rate"},
                  {"solve_seconds", "kg.Scalar", false, "the solver's time, s, passed through"}},
       .outputs = {{"report", "kg.Report", true,
                    "the JSON document (version 1; solve_seconds null with --reproducible)"}},

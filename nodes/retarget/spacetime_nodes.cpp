@@ -229,7 +229,7 @@ NodeType spacetime_type() {
 }  // namespace
 
 std::vector<graph::NodeType> retarget_spacetime_node_types() {
-  return {spacetime_type()};
+  return {spacetime_type(), retarget::at_rate_node_type()};
 }
 
 }  // namespace kg

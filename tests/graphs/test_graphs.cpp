@@ -165,9 +165,9 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
       REQUIRE(r.code == 0);
       const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
       const auto result = kg::io::read_bvh(output).motion;
-      CHECK(result.fps == Approx(30));
-      CHECK(result.frame_count() ==
-            kg::motion::resampled_frame_count(source.motion.frame_count(), source.motion.fps, 30));
+      // Solved and written at the input's rate (fps and output_fps default to it), every frame.
+      CHECK(result.fps == Approx(source.motion.fps));
+      CHECK(result.frame_count() == source.motion.frame_count());
       // Equality constraints within 1 mm and no inequality violated by more (the issue's figure).
       const YAML::Node metrics = YAML::LoadFile(report.string());
       CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
@@ -562,7 +562,9 @@ TEST_CASE("no run overwrites a file it read: a guessed skeleton, the graph itsel
 }
 
 TEST_CASE(
-    "every graph that reads a clip takes units, up, source_fps, trim and output_units, wired to its nodes",
+    "every graph that reads a clip takes units, up, source_fps, trim, fps, output_fps and output_units, "
+    "wired to "
+    "its nodes",
     "[graphs]") {
   // One vocabulary (issue 14): each name reaches a node param, so a bad value fails validation
   // at that param; a graph that declared a name and ignored it would say "valid".
@@ -585,9 +587,16 @@ TEST_CASE(
              {"up", "w", "'w'"},
              {"source_fps", "-1", "-1"},
              {"trim", "5..3", "FIRST..LAST"},
+             {"fps", "-1", "-1"},
+             {"output_fps", "-1", "-1"},
              {"output_units", "furlong", "furlong"}}) {
-      // A graph that writes no clip (graphs/inspect.yaml) has no unit to write it in.
-      if (name == "output_units" && text.find("type: io.export_") == std::string::npos) continue;
+      // A graph that writes no clip (graphs/inspect.yaml) has no unit or rate to write it in, and
+      // one without a solver (convert.yaml, inspect.yaml) no rate to solve at.
+      const bool writes = text.find("type: io.export_") != std::string::npos;
+      if ((name == "output_units" || name == "output_fps") && !writes) continue;
+      if (name == "fps" && text.find("type: retarget.spacetime") == std::string::npos &&
+          text.find("type: retime.retime") == std::string::npos)
+        continue;
       std::vector<std::string> args = base;
       args.insert(args.end(), {"--set", name + "=" + bad});
       const Result r = kinegraph(args);
@@ -597,4 +606,29 @@ TEST_CASE(
     }
   }
   CHECK(checked >= 7);
+}
+
+TEST_CASE("every graph that solves writes at the input's rate by default; retimings solve at 30 Hz",
+          "[graphs]") {
+  for (const auto& entry : fs::recursive_directory_iterator(kSource / "graphs")) {
+    if (entry.path().extension() != ".yaml") continue;
+    const std::string text = read_file(entry.path());
+    if (text.find("\n  input:") == std::string::npos) continue;
+    if (text.find("type: retarget.spacetime") == std::string::npos &&
+        text.find("type: retime.retime") == std::string::npos)
+      continue;
+    INFO(entry.path().string());
+    const auto default_of = [&text](const std::string& name) -> std::string {
+      const std::size_t at = text.find("\n  " + name + ":");
+      if (at == std::string::npos) return "(not declared)";
+      const std::size_t open = text.find("default: \"", at);
+      return open == std::string::npos ? "(no default)"
+                                       : text.substr(open + 10, text.find('"', open + 10) - open - 10);
+    };
+    // Retargeting solves every frame written (the input's rate): at 30 Hz, a capture's jitter
+    // between the solve's frames would stay in the plants written at 120 Hz (02_01.bvh: 2.8 cm).
+    const bool retargets = text.find("type: retarget.spacetime") != std::string::npos;
+    CHECK(default_of("fps") == (retargets ? "0" : "30"));
+    CHECK(default_of("output_fps") == "0");
+  }
 }

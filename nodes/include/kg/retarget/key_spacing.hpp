@@ -52,6 +52,8 @@ struct KeySpacing {
   std::vector<int> frames_per_key;
   // How it was chosen, for reports: "pyramid: level energies ..., threshold ..." or "by hand".
   std::string reason;
+  // The rate the frames count at (frames per second; 0: the rate of the motion they are used with).
+  double fps = 0;
 };
 
 // --- Additive (issue 3): the decomposition and the choice. ---

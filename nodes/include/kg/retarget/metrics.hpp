@@ -115,9 +115,11 @@ struct AddedEnergy {
   double min_cutoff_hz = 0, max_cutoff_hz = 0;  // over the channels
 };
 // d = result - reference per channel (rotations unwrapped); frames_per_key: one entry per
-// channel (or one for all), each >= 1. Throws std::invalid_argument for mismatched motions or keys.
+// channel (or one for all), each >= 1, counted in frames at keys_fps (0: result's rate; a solve at
+// 30 Hz written at 120 Hz keeps its cut-off in Hz). Throws std::invalid_argument for mismatched
+// motions or keys.
 AddedEnergy energy_above_cutoff(const motion::Motion& result, const motion::Motion& reference,
-                                const std::vector<int>& frames_per_key);
+                                const std::vector<int>& frames_per_key, double keys_fps = 0);
 
 // ---- everything, and its JSON ----
 struct MetricsInputs {
@@ -129,6 +131,7 @@ struct MetricsInputs {
   const motion::Motion* source = nullptr;      // optional: before adaptation, own skeleton
   const motion::Motion* initial = nullptr;     // optional: the initial estimate m1
   std::vector<int> frames_per_key{};           // per channel, or one for all; empty: 4
+  double keys_fps = 0;                         // the rate frames_per_key counts at; 0: result's
   std::optional<double> solve_seconds{};
   double tolerance = 1e-3;  // metres (or channel unit): violated_rows
 };
@@ -143,6 +146,10 @@ struct RetargetMetrics {
   std::vector<KindMetrics> kinds;     // sorted by kind name
   double worst_violation_metres = 0;  // over the kinds in metres
   SkateSummary skate;
+  // The initial estimate's travel over the same plants (with an initial estimate): what copying
+  // the scaled source onto the target gives, at the same rate, for comparison; a capture's own
+  // jitter between the solve's frames shows in both when the result is written at a finer rate.
+  std::optional<SkateSummary> initial_skate;
   JerkFigures jerk;
   std::optional<JerkFigures> source_jerk, displacement_jerk;  // with a source
   std::optional<AddedEnergy> energy;                          // with an initial estimate or source

@@ -31,5 +31,7 @@ std::vector<graph::Extension> builtin_constraint_kind_extensions();
 
 // The node `retarget.per_frame_ik` (also listed by retarget_metrics_node_types).
 graph::NodeType per_frame_ik_node_type();
+// The node `retarget.at_rate` (listed by retarget_spacetime_node_types).
+graph::NodeType at_rate_node_type();
 
 }  // namespace kg::retarget
