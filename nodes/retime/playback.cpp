@@ -32,10 +32,10 @@ int output_frame_count(const TimeWarp& warp, double fps) {
   return static_cast<int>(frames);
 }
 
-motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps) {
+motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps, double slack) {
   source.check();
   const int frames = output_frame_count(warp, fps);
-  if (std::abs(warp.source_duration - source.duration()) > 0.5 / source.fps)
+  if (std::abs(warp.source_duration - source.duration()) > (slack < 0 ? 0.5 / source.fps : slack) + 1e-9)
     throw std::invalid_argument("retimed playback: the warp plays " + std::to_string(warp.source_duration) +
                                 " s of source but the clip '" + source.name + "' lasts " +
                                 std::to_string(source.duration()) + " s");

@@ -619,6 +619,7 @@ std::vector<graph::NodeType> retime_node_types() {
   out.push_back(retime::torque_limits_node_type());
   out.push_back(retime::hulls_node_type());
   out.push_back(retime::retime_node_type());
+  out.push_back(retime::playback_node_type());
   out.push_back(retime::write_curves_node_type());
   out.push_back(retime::write_forces_node_type());
   return out;

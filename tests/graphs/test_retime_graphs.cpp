@@ -35,7 +35,7 @@ const fs::path kSource = KG_SOURCE_DIR;
 const fs::path kData = KG_DATA_DIR;
 const fs::path kRetime = kSource / "graphs/retime.yaml";
 const fs::path kChecked = kSource / "tests/graphs/data/retime_checked.yaml";
-constexpr double kFps = 30;  // every retiming graph works and writes at 30 Hz by default
+constexpr double kFps = 30;  // every retiming graph works at 30 Hz by default, and writes at the input's rate
 
 Result run_graph(const fs::path& graph, const std::vector<std::string>& sets) {
   std::vector<std::string> args{"run", graph.string()};
@@ -44,8 +44,8 @@ Result run_graph(const fs::path& graph, const std::vector<std::string>& sets) {
 }
 
 // Frames of a retiming of `duration` seconds written at kFps (retime.retime's count).
-int output_frames(double duration) {
-  return static_cast<int>(std::floor(duration * kFps + 1e-9)) + 1;
+int output_frames(double duration, double fps = kFps) {
+  return static_cast<int>(std::floor(duration * fps + 1e-9)) + 1;
 }
 
 // The still figure the synthesizer draws, standing (the first frame of its jump), as a motion of
@@ -147,23 +147,25 @@ YAML::Node check_report(const fs::path& path, double duration_scale, double sour
   return r;
 }
 
-// The retimed clip: kFps, the frames its duration gives, the source's skeleton.
-void check_retimed_clip(const fs::path& path, double duration, int joints) {
+// The retimed clip: at `fps` (the input's rate, output_fps' default), the frames its duration
+// gives, the source's skeleton.
+void check_retimed_clip(const fs::path& path, double duration, int joints, double fps) {
   const kg::motion::Motion m = kg::io::read_bvh(path).motion;
-  CHECK(m.fps == Approx(kFps));
-  CHECK(m.frame_count() == output_frames(duration));
+  CHECK(m.fps == Approx(fps));
+  CHECK(m.frame_count() == output_frames(duration, fps));
   CHECK(m.skeleton->joint_count() == joints);
 }
 
-// The source clip as the graphs see it at kFps: its duration and joint count.
+// The source clip as the graphs see it at kFps: its duration and joint count; and its own rate.
 struct Source {
   double duration = 0;
   int joints = 0;
+  double rate = 0;
 };
 Source source_at_30(const fs::path& clip, double fps = 0) {
   const kg::io::ImportedMotion in = kg::io::import_motion(clip.string(), "", {.fps = fps});
   const int frames = kg::motion::resampled_frame_count(in.motion.frame_count(), in.motion.fps, kFps);
-  return {(frames - 1) / kFps, in.motion.skeleton->joint_count()};
+  return {(frames - 1) / kFps, in.motion.skeleton->joint_count(), in.motion.fps};
 }
 
 // A graph variable's default (graphs document theirs at the top).
@@ -228,8 +230,8 @@ TEST_CASE("graphs/retime.yaml retimes a captured jump, walk and run to half thei
     REQUIRE(r.code == 0);
     const Source source = source_at_30(clip.path, clip.fps);
     const YAML::Node rep = check_report(report, 0.5, source.duration);
-    check_retimed_clip(output, 0.5 * source.duration, source.joints);
-    CHECK(rep["output_frames"].as<int>() == output_frames(0.5 * source.duration));
+    check_retimed_clip(output, 0.5 * source.duration, source.joints, source.rate);
+    CHECK(rep["output_frames"].as<int>() == output_frames(0.5 * source.duration));  // at the working rate
     if (clip.flight)
       CHECK(rep["frames_flight"].as<int>() > 0);
     else
@@ -266,7 +268,7 @@ TEST_CASE(
   CHECK_THAT(r.err, Catch::Contains("hulls: same_as: reference"));
   const Source source = source_at_30(hop);
   const YAML::Node rep = check_report(dir / "report.json", 0.5, source.duration);
-  check_retimed_clip(dir / "out.bvh", 0.5 * source.duration, source.joints);
+  check_retimed_clip(dir / "out.bvh", 0.5 * source.duration, source.joints, source.rate);
   CHECK(rep["feasible"].as<bool>());  // every output frame with contact inside its hull
 
   const std::vector<ForceFrame> forces = read_forces(dir / "forces.json");
@@ -293,7 +295,7 @@ TEST_CASE(
 
   // The stands took the speed-up: the mean speed outside the flight is well over 1.
   const auto curves = read_curves(dir / "curves.csv");
-  REQUIRE(static_cast<int>(curves.size()) == output_frames(0.5 * source.duration));
+  REQUIRE(static_cast<int>(curves.size()) == output_frames(0.5 * source.duration, source.rate));
   CHECK(curves.front()[1] == Approx(0).margin(1e-9));
   CHECK(curves.back()[1] == Approx(source.duration).margin(1e-6));
   const double stand_output = 0.5 * source.duration - flight.output;
@@ -346,7 +348,7 @@ TEST_CASE("graphs/retime/gravity.yaml on the rigid hop: the flight plays at แน—ย
   const Source source = source_at_30(hop);
   for (const std::string side : {"low", "high"}) {
     check_report(dir / (side + ".json"), 1, source.duration);
-    check_retimed_clip(dir / (side + ".bvh"), source.duration, source.joints);
+    check_retimed_clip(dir / (side + ".bvh"), source.duration, source.joints, source.rate);
   }
   const Flight low = interior_flight(read_forces(dir / "low_forces.json"));
   const Flight high = interior_flight(read_forces(dir / "high_forces.json"));
@@ -368,7 +370,7 @@ TEST_CASE("graphs/demo.yaml retimes its synthesized jump to half its duration", 
   const kg::motion::Motion jump = kg::io::read_bvh(out / "jump_30hz.bvh").motion;
   const double duration = (jump.frame_count() - 1) / kFps;  // the file's Frame Time has 9 digits
   check_report(out / "jump_retimed_report.json", 0.5, duration);
-  check_retimed_clip(out / "jump_retimed.bvh", 0.5 * duration, jump.skeleton->joint_count());
+  check_retimed_clip(out / "jump_retimed.bvh", 0.5 * duration, jump.skeleton->joint_count(), kFps);
   CHECK(static_cast<int>(read_curves(out / "jump_retimed_curves.csv").size()) ==
         output_frames(0.5 * duration));
 
@@ -470,7 +472,7 @@ TEST_CASE("the graphs of graphs/retime/ reproduce the paper's experiments on the
     const double scale = std::stod(default_of(graph, "duration_scale"));
     for (const auto& [bvh, report] : c.outputs) {
       check_report(files[report + "@" + c.graph], scale, source.duration);
-      check_retimed_clip(files[bvh + "@" + c.graph], scale * source.duration, source.joints);
+      check_retimed_clip(files[bvh + "@" + c.graph], scale * source.duration, source.joints, source.rate);
     }
   }
 
@@ -483,11 +485,12 @@ TEST_CASE("the graphs of graphs/retime/ reproduce the paper's experiments on the
   CHECK(half.output > 0.9 * half.source);
   CHECK(half.output < 1.1 * half.source);
 
-  // fig. 8: the pinned moment plays when asked (output 1.0 s is output frame 30).
+  // fig. 8: the pinned moment plays when asked (output 1.0 s; curves at the rate written).
   const auto pinned = read_curves(files["curves@jump_pin"]);
-  REQUIRE(pinned.size() > 30);
-  CHECK(pinned[30][0] == Approx(1.0));
-  CHECK(pinned[30][1] == Approx(1.25).margin(1e-6));
+  const std::size_t at_one_second = static_cast<std::size_t>(std::lround(jump_source.rate));
+  REQUIRE(pinned.size() > at_one_second);
+  CHECK(pinned[at_one_second][0] == Approx(1.0));
+  CHECK(pinned[at_one_second][1] == Approx(1.25).margin(1e-6));
 
   // fig. 9: lower gravity, a longer flight; higher gravity, a shorter one.
   const Flight low = interior_flight(read_forces(files["forces_low@gravity"]));

@@ -2,6 +2,7 @@
 #pragma once
 
 #include "kg/body/nodes.hpp"
+#include "kg/graph/registry.hpp"
 #include "kg/graph/value.hpp"
 #include "kg/motion/nodes.hpp"
 #include "kg/retime/contacts.hpp"
@@ -13,3 +14,8 @@ KG_DECLARE_TYPE(kg::retime::Contacts, "kg.Contacts")
 KG_DECLARE_TYPE(kg::retime::Hulls, "kg.Hulls")
 KG_DECLARE_TYPE(kg::retime::PathTorques, "kg.PathTorques")
 KG_DECLARE_TYPE(kg::retime::TimeWarp, "kg.TimeWarp")
+
+namespace kg::retime {
+// The node `retime.playback` (listed by retime_node_types).
+graph::NodeType playback_node_type();
+}  // namespace kg::retime

@@ -23,8 +23,11 @@ int output_frame_count(const TimeWarp& warp, double fps);
 // frame). Keeps the skeleton; the name gains nothing. Throws std::invalid_argument for fps <= 0
 // (or too many frames, output_frame_count),
 // a motion failing check(), or a warp whose source duration differs from the clip's by more
-// than half a frame.
-motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps);
+// than `slack` seconds (negative: half a frame of the clip). A clip played at a finer rate than
+// the retiming worked at may outlast the warp's source by up to one frame of the working rate:
+// then pass that frame as the slack; its last poses after p's end are not played.
+motion::Motion retimed_motion(const motion::Motion& source, const TimeWarp& warp, double fps,
+                              double slack = -1);
 
 // One row per output frame at `fps`: t,p,pdot,pddot (seconds, source seconds, per second, per
 // second²), with a header line.
