@@ -430,7 +430,7 @@ TEST_CASE(
              Catch::StartsWith("LeftToeBase/end gets no plant although it stays within 3 cm of its "
                                "rest level for "));
   CHECK_THAT(d.warnings[1], Catch::Contains("fps): its horizontal speed there is 0.4 to ") &&
-                                Catch::Contains("below speed_threshold 0.15 m/s"));
+                                Catch::Contains("below its speed threshold 0.15 m/s"));
   // A speed threshold above the slide gives the plants back, and no warning.
   const motion::FootplantDetection scaled =
       motion::detect_footplants(fast, {.speed_threshold = 0.5, .trim_distance = 0});
