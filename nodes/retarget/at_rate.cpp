@@ -106,10 +106,6 @@ ResultAtRate result_at_rate(const motion::Motion& at_rate, const motion::Motion&
   return out;
 }
 
-}  // namespace kg::retarget
-
-namespace kg::retarget {
-
 namespace {
 
 int instant(const Sample& sample) {
@@ -136,6 +132,7 @@ void run_at_rate(std::span<const Sample* const> run, double ratio, int last_fram
     out.push_back(std::move(s));
     return;
   }
+  const std::size_t appended = out.size();
   const int first_instant = instant(*run.front());
   const int start = *std::min_element(run.front()->frames.begin(), run.front()->frames.end());
   const int begin = std::clamp(static_cast<int>(std::ceil(start * ratio - 1e-9)), 0, last_frame);
@@ -150,13 +147,24 @@ void run_at_rate(std::span<const Sample* const> run, double ratio, int last_fram
     const double u = x - instant(a);
     Sample s;
     const int at = instant(a);
-    for (int f : a.frames)
-      s.frames.push_back(std::clamp(g - static_cast<int>(std::lround((at - f) * ratio)), begin, g));
+    // An earlier frame stays at least one frame earlier: at a coarser rate a non-skid pair 1/120 s
+    // apart reads consecutive frames, not one frame against itself.
+    for (int f : a.frames) {
+      const int back = f < at ? std::max(1, static_cast<int>(std::lround((at - f) * ratio))) : 0;
+      s.frames.push_back(std::clamp(g - back, begin, g));
+    }
     // A sample that reads one instant against an earlier one says nothing when both are g.
     if (s.frames.size() > 1 && std::all_of(s.frames.begin(), s.frames.end(), [g](int f) { return f == g; }))
       continue;
     s.params = blended(a.params, b.params, u);
     s.locals = blended(a.locals, b.locals, u);
+    out.push_back(std::move(s));
+  }
+  // A run shorter than one frame of the new rate still holds at the frame nearest its middle,
+  // when its samples read one instant each; a pair of instants has no two frames to compare.
+  if (out.size() == appended && run.front()->frames.size() == 1) {
+    Sample s = *run[run.size() / 2];
+    for (int& f : s.frames) f = to_frame(f);
     out.push_back(std::move(s));
   }
 }
@@ -186,7 +194,7 @@ ConstraintSet constraints_at_rate(const ConstraintSet& set, double from_fps, dou
                     moved.samples);
         first = i;
       }
-    out.constraints.push_back(std::move(moved));
+    if (!moved.samples.empty()) out.constraints.push_back(std::move(moved));
   }
   return out;
 }

@@ -1,5 +1,6 @@
 // retarget.at_rate: a thin adapter over result_at_rate (at_rate.hpp).
 #include <memory>
+#include <string>
 #include <utility>
 
 #include "kg/base/text.hpp"
@@ -8,6 +9,26 @@
 
 namespace kg::retarget {
 namespace {
+
+void log_left_out(graph::RunContext& ctx, const ConstraintSet& solved, const ConstraintSet& written,
+                  double fps) {
+  // `written` keeps `solved`'s order, less the constraints left out.
+  std::size_t next = 0;
+  std::string left_out;
+  int count = 0;
+  for (const Constraint& c : solved.constraints)
+    if (next < written.constraints.size() && written.constraints[next].label == c.label &&
+        written.constraints[next].kind == c.kind)
+      ++next;
+    else {
+      ++count;
+      if (count <= 5) left_out += (left_out.empty() ? "'" : ", '") + c.label + "'";
+    }
+  if (count == 0) return;
+  ctx.log(std::to_string(count) + " constraint" + (count == 1 ? "" : "s") + " (" + left_out +
+          (count > 5 ? ", ..." : "") + ") span less than one frame at " + text::significant(fps) +
+          " fps: not checked at the rate written");
+}
 
 class AtRateNode final : public graph::Node {
  public:
@@ -24,9 +45,12 @@ class AtRateNode final : public graph::Node {
       ctx.log("the result solved at " + text::significant(solve_source.fps) + " fps is written at " +
               text::significant(clip.fps) + " fps (" + std::to_string(clip.frame_count()) +
               " frames): the source at that rate plus the solve's displacement, a spline in time");
-    if (ctx.has_input("constraints"))
-      ctx.output("constraints", constraints_at_rate(ctx.input<ConstraintSet>("constraints"), solve_source.fps,
-                                                    clip.fps, clip.frame_count()));
+    if (ctx.has_input("constraints")) {
+      const ConstraintSet& solved = ctx.input<ConstraintSet>("constraints");
+      ConstraintSet written = constraints_at_rate(solved, solve_source.fps, clip.fps, clip.frame_count());
+      log_left_out(ctx, solved, written, clip.fps);
+      ctx.output("constraints", std::move(written));
+    }
     ctx.output("initial", std::move(r.initial));
     ctx.output("motion", std::move(r.result));
   }

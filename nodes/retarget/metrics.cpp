@@ -106,11 +106,17 @@ Eigen::VectorXd displacement(const Motion& result, const Motion& reference, int 
 
 // ---- foot skate ----
 std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
-  // Point identity -> (label, frame -> offset at that frame), in order of first appearance.
+  // Point identity -> frame -> (offset at that frame, the constraints naming it there), in order
+  // of first appearance.
   using Key = std::tuple<int, double, double, double>;
+  struct AtFrame {
+    Eigen::Vector3d local;
+    std::vector<std::size_t> constraints;  // indices into set.constraints, ascending
+  };
   std::map<Key, std::size_t> index;
-  std::vector<std::pair<PlantSkate, std::map<int, Eigen::Vector3d>>> points;
-  for (const Constraint& c : set.constraints) {
+  std::vector<std::pair<PointRef, std::map<int, AtFrame>>> points;
+  for (std::size_t ci = 0; ci < set.constraints.size(); ++ci) {
+    const Constraint& c = set.constraints[ci];
     const bool position = c.kind == "position", same_place = c.kind == "same_place";
     if (!position && !same_place) continue;
     if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; }))
@@ -129,27 +135,35 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
       const PointRef& p = c.points[i];
       const Key key{p.joint, p.local.x(), p.local.y(), p.local.z()};
       auto [it, added] = index.try_emplace(key, points.size());
-      if (added) {
-        PlantSkate plant;
-        plant.label = c.label;
-        plant.point = p;
-        points.push_back({plant, {}});
+      if (added) points.push_back({p, {}});
+      std::map<int, AtFrame>& frames = points[it->second].second;
+      for (const Sample& s : c.samples) {
+        if (i >= s.frames.size()) continue;
+        AtFrame& at = frames.try_emplace(s.frames[i], AtFrame{point_at(c, s, i).local, {}}).first->second;
+        if (at.constraints.empty() || at.constraints.back() != ci) at.constraints.push_back(ci);
       }
-      std::map<int, Eigen::Vector3d>& frames = points[it->second].second;
-      for (const Sample& s : c.samples)
-        if (i < s.frames.size()) frames.emplace(s.frames[i], point_at(c, s, i).local);
     }
   }
+  // A run of consecutive frames is one plant while each frame shares a constraint with the one
+  // before: two plants of one foot that touch at a coarse rate stay two.
+  const auto share = [](const AtFrame& a, const AtFrame& b) {
+    return std::find_first_of(a.constraints.begin(), a.constraints.end(), b.constraints.begin(),
+                              b.constraints.end()) != a.constraints.end();
+  };
   std::vector<PlantSkate> plants;
-  for (const auto& [proto, frames] : points) {
+  for (const auto& [point, frames] : points) {
     auto it = frames.begin();
     while (it != frames.end()) {
-      PlantSkate plant = proto;
+      PlantSkate plant;
+      plant.point = point;
+      plant.label = set.constraints[it->second.constraints.front()].label;
       plant.first_frame = plant.last_frame = plant.worst_frame = it->first;
-      plant.locals = {it->second};
-      for (++it; it != frames.end() && it->first == plant.last_frame + 1; ++it) {
+      plant.locals = {it->second.local};
+      for (auto previous = it++;
+           it != frames.end() && it->first == plant.last_frame + 1 && share(previous->second, it->second);
+           previous = it++) {
         plant.last_frame = it->first;
-        plant.locals.push_back(it->second);
+        plant.locals.push_back(it->second.local);
       }
       plants.push_back(plant);
     }

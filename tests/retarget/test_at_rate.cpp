@@ -168,3 +168,30 @@ TEST_CASE("constraints_at_rate: a 30 Hz plant checked at every 120 Hz frame of i
       for (int f : sample.frames) CHECK(f < 50);
   CHECK_THROWS_WITH(kg::retarget::constraints_at_rate(set, 0, 120, 10), Contains("positive rates"));
 }
+
+TEST_CASE("constraints_at_rate: a 120 Hz plant checked at 30 Hz reads consecutive frames",
+          "[retarget][at_rate]") {
+  using kg::retarget::Constraint;
+  using kg::retarget::ConstraintSet;
+  ConstraintSet set;
+  Constraint skid{.kind = "same_place", .label = "toe non-skid"};
+  Constraint brief{.kind = "same_place", .label = "brief non-skid"};
+  Constraint plant{.kind = "position", .label = "brief plant", .params = {0, 0, 0, 1, 1, 1}};
+  for (int f = 40; f < 60; ++f) skid.samples.push_back({.frames = {f, f + 1}});
+  for (int f = 101; f < 103; ++f) brief.samples.push_back({.frames = {f, f + 1}});
+  for (int f = 101; f <= 103; ++f) plant.samples.push_back({.frames = {f}});
+  set.constraints = {skid, brief, plant};
+
+  const ConstraintSet at30 = kg::retarget::constraints_at_rate(set, 120, 30, 50);
+  // The brief plant (frames 101-103, 1/40 s) holds no two 30 Hz frames: its non-skid is left out;
+  // its position constraint stays, at the frame nearest its middle (102 / 4).
+  REQUIRE(at30.constraints.size() == 2);
+  CHECK(at30.constraints[0].label == "toe non-skid");
+  CHECK(at30.constraints[1].label == "brief plant");
+  const auto& s = at30.constraints[0].samples;
+  REQUIRE(s.size() == 5);  // instants 11 .. 15 against the frame before, inside frames 10 .. 15
+  for (std::size_t i = 0; i < s.size(); ++i)
+    CHECK(s[i].frames == std::vector<int>{10 + static_cast<int>(i), 11 + static_cast<int>(i)});
+  REQUIRE(at30.constraints[1].samples.size() == 1);
+  CHECK(at30.constraints[1].samples[0].frames == std::vector<int>{26});
+}

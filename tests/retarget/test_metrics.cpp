@@ -130,6 +130,19 @@ TEST_CASE("metrics: foot skate is the greatest horizontal travel from the plant'
   CHECK(s.worst == Approx(std::hypot(0.10, 0.03)));
   CHECK(s.mean == Approx(std::hypot(0.10, 0.03) / 2));
 
+  // Two plants of one foot that touch (as a brief lift does at a coarse rate) stay two, each
+  // with its own label: the slip between them is no skate.
+  ConstraintSet touching;
+  touching.constraints.push_back(on_foot("position", {0, 0, 0, 0, 1, 0}, 2, 6, "LeftHeel plant 1"));
+  touching.constraints.push_back(on_foot("position", {0, 0, 0, 0, 1, 0}, 7, 9, "LeftHeel plant 2"));
+  const SkateSummary ts = foot_skate(touching, PoseCache(std::span<const Motion>(&m, 1)));
+  REQUIRE(ts.plants.size() == 2);
+  CHECK(ts.plants[0].label == "LeftHeel plant 1");
+  CHECK(ts.plants[0].last_frame == 6);
+  CHECK(ts.plants[1].label == "LeftHeel plant 2");
+  CHECK(ts.plants[1].first_frame == 7);
+  CHECK(ts.plants[1].travel == Approx(0.02));
+
   // Other kinds and moving targets are no plants.
   ConstraintSet others;
   others.constraints.push_back(on_foot("region", {-1, -1, -1, 1, 1, 1}, 0, 29, "box"));

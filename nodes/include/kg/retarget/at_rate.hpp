@@ -44,10 +44,13 @@ ResultAtRate result_at_rate(const motion::Motion& at_rate, const motion::Motion&
 // instant is the latest frame it reads); a run covers the time from its first sample's earliest
 // frame to its last instant, and every frame of to_fps in that time gets a sample: its instant is
 // that frame, and each earlier frame a sample reads keeps its distance in seconds (a non-skid
-// pair one 30 Hz frame apart reads frames 4 apart at 120 Hz), kept inside the run. Per-sample
+// pair one 30 Hz frame apart reads frames 4 apart at 120 Hz; at a coarser rate, at least one frame
+// apart), kept inside the run. Per-sample
 // params and locals are interpolated linearly in time between the run's samples. A run of one
-// sample stays one sample, at the nearest frame. Frames are clamped to 0 .. to_frames - 1. The
-// same rate gives the set unchanged.
+// sample stays one sample, at the nearest frame, and so does a run of one-instant samples too
+// brief to hold a frame of to_fps (its middle sample). Frames are clamped to 0 .. to_frames - 1. A
+// constraint left with no sample is left out: a non-skid plant shorter than one frame of to_fps
+// has no two frames written to compare. The same rate gives the set unchanged.
 // Throws std::invalid_argument for rates that are not positive or to_frames < 1.
 ConstraintSet constraints_at_rate(const ConstraintSet& set, double from_fps, double to_fps, int to_frames);
 

@@ -9,7 +9,9 @@
 //   foot skate            for each planted point: the points of `position` and `same_place`
 //                         constraints over the frames their samples read, merged per point (the
 //                         same joint and local offset, so the height and non-skid halves of one
-//                         plant are one plant) and split into runs of consecutive frames. A run's
+//                         plant are one plant) and split into runs of consecutive frames, each
+//                         frame sharing a constraint with the one before (two plants of one
+//                         foot that touch at a coarse rate stay two). A run's
 //                         skate is the greatest horizontal (world X/Z, +Y is up) distance of the
 //                         point from where it was on the run's first frame (a sample's own point
 //                         offsets, on a morphing segment, are used at its frame). Samples of
@@ -66,7 +68,7 @@ namespace kg::retarget {
 
 // ---- foot skate ----
 struct PlantSkate {
-  std::string label;  // of the first constraint naming the point
+  std::string label;  // of the first constraint naming the point at the run's first frame
   PointRef point;
   int first_frame = 0;  // the run of consecutive frames
   int last_frame = 0;
