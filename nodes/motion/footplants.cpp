@@ -156,6 +156,9 @@ void FootplantOptions::validate() const {
           "in [0, 0.5]");
   require(options::non_negative(trim_distance), o, "trim_distance", trim_distance,
           ">= 0 and finite (metres; 0: no trimming)");
+  require(options::non_negative(bridge_s), o, "bridge_s", bridge_s, ">= 0 and finite (seconds; 0: none)");
+  require(options::non_negative(bridge_distance), o, "bridge_distance", bridge_distance,
+          ">= 0 and finite (metres)");
   require(options::non_negative(rest_window_s), o, "rest_window_s", rest_window_s,
           ">= 0 and finite (seconds)");
   require(character >= 0, o, "character", character, ">= 0");
@@ -213,6 +216,9 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
   std::vector<std::vector<std::pair<int, int>>> low_runs(np);
   std::vector<std::string> would_warn(np);
   for (std::size_t i = 0; i < np; ++i) {
+    const std::size_t plants_before = d.plants.size();
+    int bridged = 0, longest_bridge = 0;
+    double widest_bridge = 0;
     auto speed = [&](int f) {
       const int a = std::max(0, f - k), b = std::min(frames - 1, f + k);
       const Eigen::Vector3d dv = at(b, i) - at(a, i);
@@ -232,6 +238,20 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
         while (last > first && (at(last, i) - median).norm() > o.trim_distance) --last;
       }
       if (last - first + 1 < min_frames) return;
+      // A lift shorter than bridge_s, back to where the point left the floor, is the capture's
+      // jitter, not a step: the plant goes on.
+      if (d.plants.size() > plants_before) {
+        Footplant& previous = d.plants.back();
+        const int gap = first - previous.last_frame - 1;
+        const Eigen::Vector3d moved = at(first, i) - at(previous.last_frame, i);
+        if (gap * 1.0 < o.bridge_s * m.fps && std::hypot(moved.x(), moved.z()) <= o.bridge_distance) {
+          ++bridged;
+          longest_bridge = std::max(longest_bridge, gap);
+          widest_bridge = std::max(widest_bridge, std::hypot(moved.x(), moved.z()));
+          first = previous.first_frame;
+          d.plants.pop_back();
+        }
+      }
       Footplant p;
       p.point = static_cast<int>(i);
       p.first_frame = first;
@@ -267,7 +287,6 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
                         " m/s (" + text::significant(100 * o.speed_relative, 3) +
                         "% of its 90th-percentile speed, " + text::significant(fast, 3) +
                         " m/s: more than speed_threshold " + text::significant(o.speed_threshold, 3) + ")");
-    const std::size_t plants_before = d.plants.size();
     int low_run = 0, longest_low_run = 0;  // consecutive frames within height_threshold
     std::vector<double> low_speeds;        // the point's speed at those frames
     bool in = false;
@@ -290,6 +309,14 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
       }
     }
     if (in) close(start, frames - 1);
+    if (bridged > 0)
+      d.notes.push_back(d.points[i].name + ": " + std::to_string(bridged) + " lift" +
+                        (bridged == 1 ? "" : "s") + " of at most " + std::to_string(longest_bridge) +
+                        " frame" + (longest_bridge == 1 ? "" : "s") + " (" +
+                        text::significant(longest_bridge / m.fps, 3) + " s) inside a plant, back within " +
+                        text::significant(100 * widest_bridge, 3) +
+                        " cm of where it left, bridged (bridge_s " + text::significant(o.bridge_s, 3) +
+                        " s, bridge_distance " + text::significant(100 * o.bridge_distance, 3) + " cm)");
     if (d.plants.size() == plants_before && longest_low_run >= min_frames) {
       std::ostringstream w;
       w << d.points[i].name << " gets no plant although it stays within " << o.height_threshold * 100

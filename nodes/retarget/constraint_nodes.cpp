@@ -57,6 +57,8 @@ class FootplantsNode final : public Node {
     detect_.hysteresis = p.get<double>("hysteresis");
     detect_.min_duration_s = p.get<double>("min_duration_s");
     detect_.trim_distance = p.get<double>("trim_distance");
+    detect_.bridge_s = p.get<double>("bridge_s");
+    detect_.bridge_distance = p.get<double>("bridge_distance");
     detect_.rest_window_s = p.get<double>("rest_window_s");
     detect_.floor = motion::parse_floor(p.get<std::string>("floor"));
     detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
@@ -144,6 +146,19 @@ std::vector<ParamSpec> footplants_params() {
                 .doc = "shorter plants are dropped, seconds",
                 .min = 0.0,
                 .max = 10.0},
+      ParamSpec{.name = "bridge_s",
+                .type = ParamType::Float,
+                .default_value = motion::FootplantOptions{}.bridge_s,
+                .doc = "a lift shorter than this (seconds) between two plants of a point, back within "
+                       "bridge_distance of where it left, is jitter: one plant (0: none)",
+                .min = 0.0,
+                .max = 1.0},
+      ParamSpec{.name = "bridge_distance",
+                .type = ParamType::Float,
+                .default_value = motion::FootplantOptions{}.bridge_distance,
+                .doc = "metres, horizontal: how far from where it left a point may come back for bridge_s",
+                .min = 0.0,
+                .max = 1.0},
       ParamSpec{
           .name = "trim_distance",
           .type = ParamType::Float,

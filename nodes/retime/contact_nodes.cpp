@@ -31,6 +31,8 @@ class ContactsNode final : public Node {
     options_.plants.speed_threshold = p.get<double>("speed_threshold");
     options_.plants.hysteresis = p.get<double>("hysteresis");
     options_.plants.min_duration_s = p.get<double>("min_duration_s");
+    options_.plants.bridge_s = p.get<double>("bridge_s");
+    options_.plants.bridge_distance = p.get<double>("bridge_distance");
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
     options_.plants.floor = motion::parse_floor(p.get<std::string>("floor"));
     options_.support_acceleration = p.get<double>("support_acceleration");
@@ -129,6 +131,20 @@ NodeType contacts_type() {
                     .doc = "shorter touches are dropped, seconds",
                     .min = 0.0,
                     .max = 10.0},
+          ParamSpec{.name = "bridge_s",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.bridge_s,
+                    .doc = "a lift shorter than this (seconds) between two touches of a point, back within "
+                           "bridge_distance of where it left, is jitter: one touch (0: none)",
+                    .min = 0.0,
+                    .max = 1.0},
+          ParamSpec{
+              .name = "bridge_distance",
+              .type = ParamType::Float,
+              .default_value = d.plants.bridge_distance,
+              .doc = "metres, horizontal: how far from where it left a point may come back for bridge_s",
+              .min = 0.0,
+              .max = 1.0},
           ParamSpec{
               .name = "rest_window_s",
               .type = ParamType::Float,

@@ -168,6 +168,47 @@ TEST_CASE("footplant options: named points, given floor, thresholds, minimum dur
   CHECK_THROWS_WITH(motion::detect_footplants(blob, {}), Catch::Contains("no foot joint found"));
 }
 
+TEST_CASE("footplants: a lift shorter than bridge_s back to where it left is one plant") {
+  // One foot point at 120 Hz: planted, lifted 6 cm (past height_threshold x hysteresis) for
+  // `gap` frames, set down `moved` metres along X, planted again.
+  auto clip = [](int gap, double moved) {
+    auto sk = std::make_shared<motion::Skeleton>();
+    sk->add_joint({.name = "root",
+                   .parent = -1,
+                   .channels = {{motion::ChannelKind::Xposition},
+                                {motion::ChannelKind::Yposition},
+                                {motion::ChannelKind::Zposition}},
+                   .end_sites = {}});
+    sk->add_joint({.name = "LeftFoot", .parent = 0, .channels = {}, .end_sites = {}});
+    const int frames = 40 + gap + 40;
+    motion::Motion m{sk, motion::FrameMatrix::Zero(frames, 3), 120.0, "lift"};
+    for (int f = 40; f < 40 + gap; ++f) m.values(f, 1) = 0.06;
+    for (int f = 40 + gap; f < frames; ++f) m.values(f, 0) = moved;
+    return m;
+  };
+  motion::FootplantOptions o;
+  o.points = {"LeftFoot"};
+  o.trim_distance = 0;
+  o.speed_threshold = 1000;  // heights alone decide here
+  const motion::FootplantDetection jitter = motion::detect_footplants(clip(2, 0.004), o);
+  INFO(describe(jitter));
+  REQUIRE(jitter.plants.size() == 1);
+  CHECK(jitter.plants[0].first_frame == 0);
+  CHECK(jitter.plants[0].last_frame == 81);
+  bool said = false;
+  for (const std::string& note : jitter.notes)
+    said = said || note.find("1 lift of at most 2 frames") != std::string::npos;
+  CHECK(said);
+  // Not bridged: bridging off, a lift as long as a step's swing, a foot set down elsewhere.
+  o.bridge_s = 0;
+  CHECK(motion::detect_footplants(clip(2, 0.004), o).plants.size() == 2);
+  o = motion::FootplantOptions{.points = {"LeftFoot"}, .speed_threshold = 1000, .trim_distance = 0};
+  CHECK(motion::detect_footplants(clip(24, 0.004), o).plants.size() == 2);
+  CHECK(motion::detect_footplants(clip(2, 0.10), o).plants.size() == 2);
+  o.bridge_distance = -1;
+  CHECK_THROWS_WITH(motion::detect_footplants(clip(2, 0.004), o), Catch::Contains("bridge_distance"));
+}
+
 TEST_CASE("footplant constraints: fixed and floor flavours, above the floor") {
   const synth::Synthesis walk =
       synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});

@@ -53,8 +53,13 @@ struct FootplantOptions {
   bool rest_on_floor = false;
   double trim_distance = 0.01;  // m: a plant's end frames farther than this from its median
                                 // position are trimmed off (0: no trimming)
-  double rest_window_s = 1.0;   // s, >= 0 (0: one rest level per point for the whole clip)
-  int character = 0;            // written into the PointRefs
+  // Two plants of a point separated by a lift shorter than bridge_s (s; 0: none), where the point
+  // comes back within bridge_distance (m, horizontal) of where it left, are one plant: a step's
+  // swing lasts 0.2 s or more, so such a lift is the capture's jitter about a threshold.
+  double bridge_s = 0.05;
+  double bridge_distance = 0.03;
+  double rest_window_s = 1.0;  // s, >= 0 (0: one rest level per point for the whole clip)
+  int character = 0;           // written into the PointRefs
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;
