@@ -133,6 +133,52 @@ std::vector<Eigen::Vector3d> point_positions(const Motion& m, const std::vector<
   return out;
 }
 
+namespace {
+
+// The body's pace where it runs: the horizontal speed (m/s, over +-0.1 s) of the mean of every
+// joint's position (whatever joint carries the translation) at the frames where its Froude number
+// v^2 / (g h) passes run_froude (h: that centre's median height above the floor), else 0.
+struct BodyPace {
+  std::vector<double> pace;  // per frame; 0 where the body walks or stands
+  double centre_height = 0;  // m above the floor
+  int running_frames = 0;
+  double fastest = 0;  // m/s
+};
+
+BodyPace running_pace(const Motion& m, double floor, double run_froude) {
+  const Skeleton& sk = *m.skeleton;
+  const int frames = m.frame_count();
+  std::vector<Eigen::Vector3d> centre(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero());
+  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
+  std::vector<double> heights(static_cast<std::size_t>(frames));
+  for (int f = 0; f < frames; ++f) {
+    forward_kinematics(sk, m.values.row(f), world);
+    Eigen::Vector3d& c = centre[static_cast<std::size_t>(f)];
+    for (const Eigen::Isometry3d& w : world) c += w.translation();
+    c /= static_cast<double>(std::max<std::size_t>(1, world.size()));
+    heights[static_cast<std::size_t>(f)] = c.y() - floor;
+  }
+  BodyPace out;
+  out.pace.assign(static_cast<std::size_t>(frames), 0.0);
+  if (frames < 2) return out;
+  out.centre_height = percentile(heights, 0.5);
+  if (!(out.centre_height > 0)) return out;
+  const double running_speed = std::sqrt(run_froude * kEarthGravity * out.centre_height);
+  const int k = std::max(1, static_cast<int>(std::lround(0.1 * m.fps)));
+  for (int f = 0; f < frames; ++f) {
+    const int a = std::max(0, f - k), b = std::min(frames - 1, f + k);
+    const Eigen::Vector3d dv = centre[static_cast<std::size_t>(b)] - centre[static_cast<std::size_t>(a)];
+    const double v = std::hypot(dv.x(), dv.z()) * m.fps / (b - a);
+    if (v <= running_speed) continue;
+    out.pace[static_cast<std::size_t>(f)] = v;
+    ++out.running_frames;
+    out.fastest = std::max(out.fastest, v);
+  }
+  return out;
+}
+
+}  // namespace
+
 int FootplantDetection::count(int point) const {
   return static_cast<int>(
       std::count_if(plants.begin(), plants.end(), [&](const Footplant& p) { return p.point == point; }));
@@ -146,6 +192,9 @@ void FootplantOptions::validate() const {
   require(options::positive(speed_threshold), o, "speed_threshold", speed_threshold, "> 0 and finite (m/s)");
   require(options::non_negative(speed_relative) && speed_relative < 1, o, "speed_relative", speed_relative,
           "in [0, 1)");
+  require(options::non_negative(body_relative) && body_relative < 1, o, "body_relative", body_relative,
+          "in [0, 1)");
+  require(options::positive(run_froude), o, "run_froude", run_froude, "> 0 and finite");
   require(hysteresis >= 1 && std::isfinite(hysteresis), o, "hysteresis", hysteresis,
           ">= 1 and finite (leave thresholds = enter thresholds x hysteresis)");
   require(options::non_negative(min_duration_s), o, "min_duration_s", min_duration_s,
@@ -213,6 +262,15 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
       std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
   // Per point: its runs of min_frames or more within height_threshold of its rest level, and the
   // warning it would get, said only if no point of its foot is planted during such a run.
+  const BodyPace running = running_pace(m, d.floor, o.run_froude);
+  if (running.running_frames > 0)
+    d.notes.push_back("the body runs at " + std::to_string(running.running_frames) + " of " +
+                      std::to_string(frames) + " frames (up to " + text::significant(running.fastest, 3) +
+                      " m/s: Froude number v^2/(g h) above run_froude " + text::significant(o.run_froude, 3) +
+                      ", h = " + text::significant(running.centre_height, 3) +
+                      " m, the height of its joints' mean above the floor)");
+  const std::vector<double> body =
+      o.body_relative > 0 && running.running_frames > 0 ? running.pace : std::vector<double>{};
   std::vector<std::vector<std::pair<int, int>>> low_runs(np);
   std::vector<std::string> would_warn(np);
   for (std::size_t i = 0; i < np; ++i) {
@@ -234,9 +292,17 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
           for (int f = first; f <= last; ++f) axis[static_cast<std::size_t>(f - first)] = at(f, i)[a];
           median[a] = percentile(axis, 0.5);
         }
-        while (first < last && (at(first, i) - median).norm() > o.trim_distance) ++first;
-        while (last > first && (at(last, i) - median).norm() > o.trim_distance) --last;
+        // Where the body moves fast (a run), a point slower than body_relative x its pace covers
+        // that much over the shortest plant while still in stance: only the roll beyond is trimmed.
+        double reach = o.trim_distance;
+        if (!body.empty()) {
+          std::vector<double> paces(body.begin() + first, body.begin() + last + 1);
+          reach = std::max(reach, o.body_relative * percentile(paces, 0.5) * o.min_duration_s);
+        }
+        while (first < last && (at(first, i) - median).norm() > reach) ++first;
+        while (last > first && (at(last, i) - median).norm() > reach) --last;
       }
+
       if (last - first + 1 < min_frames) return;
       // A lift shorter than bridge_s, back to where the point left the floor, is the capture's
       // jitter, not a step: the plant goes on.
@@ -291,23 +357,38 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
     std::vector<double> low_speeds;        // the point's speed at those frames
     bool in = false;
     int start = 0;
+    int by_body = 0;  // frames admitted only by the body's pace
+    double by_body_speed = 0, by_body_pace = 0;
     for (int f = 0; f < frames; ++f) {
       const double h = at(f, i).y() - base[static_cast<std::size_t>(f)], v = speed(f);
+      const double pace = body.empty() ? 0.0 : body[static_cast<std::size_t>(f)];
+      const double threshold = std::max(enter_speed, o.body_relative * pace);
       low_run = h <= o.height_threshold ? low_run + 1 : 0;
       if (low_run == min_frames) low_runs[i].push_back({f - min_frames + 1, f});
       if (low_run > min_frames) low_runs[i].back().second = f;
       longest_low_run = std::max(longest_low_run, low_run);
       if (h <= o.height_threshold) low_speeds.push_back(v);
       if (!in) {
-        if (h <= o.height_threshold && v <= enter_speed) {
+        if (h <= o.height_threshold && v <= threshold) {
           in = true;
           start = f;
         }
-      } else if (h > o.height_threshold * o.hysteresis || v > enter_speed * o.hysteresis) {
+      } else if (h > o.height_threshold * o.hysteresis || v > threshold * o.hysteresis) {
         in = false;
         close(start, f - 1);
       }
+      if (in && v > enter_speed * (f == start ? 1 : o.hysteresis)) {
+        ++by_body;
+        by_body_speed = std::max(by_body_speed, v);
+        by_body_pace = std::max(by_body_pace, pace);
+      }
     }
+    if (by_body > 0)
+      d.notes.push_back(d.points[i].name + ": " + std::to_string(by_body) + " frame" +
+                        (by_body == 1 ? "" : "s") + " on the floor at up to " +
+                        text::significant(by_body_speed, 3) + " m/s, slower than " +
+                        text::significant(100 * o.body_relative, 3) + "% of the body's pace (up to " +
+                        text::significant(by_body_pace, 3) + " m/s; body_relative), taken for stance");
     if (in) close(start, frames - 1);
     if (bridged > 0)
       d.notes.push_back(d.points[i].name + ": " + std::to_string(bridged) + " lift" +

@@ -59,6 +59,8 @@ class FootplantsNode final : public Node {
     detect_.trim_distance = p.get<double>("trim_distance");
     detect_.bridge_s = p.get<double>("bridge_s");
     detect_.bridge_distance = p.get<double>("bridge_distance");
+    detect_.body_relative = p.get<double>("body_relative");
+    detect_.run_froude = p.get<double>("run_froude");
     detect_.rest_window_s = p.get<double>("rest_window_s");
     detect_.floor = motion::parse_floor(p.get<std::string>("floor"));
     detect_.character = static_cast<int>(p.get<std::int64_t>("character"));
@@ -146,6 +148,20 @@ std::vector<ParamSpec> footplants_params() {
                 .doc = "shorter plants are dropped, seconds",
                 .min = 0.0,
                 .max = 10.0},
+      ParamSpec{.name = "body_relative",
+                .type = ParamType::Float,
+                .default_value = motion::FootplantOptions{}.body_relative,
+                .doc = "where the body runs, a point slower than this share of its pace may be planted (a "
+                       "run's stance foot rolls at up to 1.5 m/s; 0: none)",
+                .min = 0.0,
+                .max = 0.99},
+      ParamSpec{
+          .name = "run_froude",
+          .type = ParamType::Float,
+          .default_value = motion::FootplantOptions{}.run_froude,
+          .doc = "the body runs where v^2 / (g h) of its pace passes this (0.5: the walk-run transition)",
+          .min = 0.01,
+          .max = 100.0},
       ParamSpec{.name = "bridge_s",
                 .type = ParamType::Float,
                 .default_value = motion::FootplantOptions{}.bridge_s,

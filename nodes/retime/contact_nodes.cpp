@@ -33,6 +33,8 @@ class ContactsNode final : public Node {
     options_.plants.min_duration_s = p.get<double>("min_duration_s");
     options_.plants.bridge_s = p.get<double>("bridge_s");
     options_.plants.bridge_distance = p.get<double>("bridge_distance");
+    options_.plants.body_relative = p.get<double>("body_relative");
+    options_.plants.run_froude = p.get<double>("run_froude");
     options_.plants.rest_window_s = p.get<double>("rest_window_s");
     options_.plants.floor = motion::parse_floor(p.get<std::string>("floor"));
     options_.support_acceleration = p.get<double>("support_acceleration");
@@ -131,6 +133,20 @@ NodeType contacts_type() {
                     .doc = "shorter touches are dropped, seconds",
                     .min = 0.0,
                     .max = 10.0},
+          ParamSpec{.name = "body_relative",
+                    .type = ParamType::Float,
+                    .default_value = d.plants.body_relative,
+                    .doc = "where the body runs, a point slower than this share of its pace may touch (a "
+                           "run's stance foot rolls at up to 1.5 m/s; 0: none)",
+                    .min = 0.0,
+                    .max = 0.99},
+          ParamSpec{
+              .name = "run_froude",
+              .type = ParamType::Float,
+              .default_value = d.plants.run_froude,
+              .doc = "the body runs where v^2 / (g h) of its pace passes this (0.5: the walk-run transition)",
+              .min = 0.01,
+              .max = 100.0},
           ParamSpec{.name = "bridge_s",
                     .type = ParamType::Float,
                     .default_value = d.plants.bridge_s,

@@ -78,7 +78,6 @@ void activate_pair(std::vector<bool>& on, std::size_t point) {
 // contact.
 int touch_where_supported(const motion::Motion& m, const motion::FootplantDetection& d,
                           const FootContactOptions& o, std::vector<std::vector<bool>>& active) {
-  constexpr double kCaptureGravity = 9.81;  // m/s²
   const int frames = m.frame_count();
   const int k = std::max(1, static_cast<int>(std::lround(m.fps / 30.0)));
   if (o.support_acceleration == 0 || frames < 2 * k + 1) return 0;
@@ -99,7 +98,7 @@ int touch_where_supported(const motion::Motion& m, const motion::FootplantDetect
   const auto touch = [&](int f) {
     if (f < k || f + k >= frames) return false;
     const auto y = [&](int g) { return root_height[static_cast<std::size_t>(g)]; };
-    if ((y(f + k) - 2 * y(f) + y(f - k)) * to_per_second2 <= -kCaptureGravity + o.support_acceleration)
+    if ((y(f + k) - 2 * y(f) + y(f - k)) * to_per_second2 <= -motion::kEarthGravity + o.support_acceleration)
       return false;
     std::vector<bool>& on = active[static_cast<std::size_t>(f)];
     bool touched = false;

@@ -136,7 +136,7 @@ std::vector<Hold> flight_holds(const Hulls& hulls, double fps, double duration, 
            ") m/s^2 is not straight down, so no constant playback is ballistic (they are weighed instead)";
     return {};
   }
-  speed = std::sqrt(g.norm() / kCaptureGravity);
+  speed = std::sqrt(g.norm() / motion::kEarthGravity);
   double total = 0;
   for (const auto& [first, last] : runs) total += (last - first) / fps / speed;
   if (total >= duration) {
@@ -220,7 +220,7 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
   const auto runs = flight_runs(hulls);
   const FlightPlacement even_ground = [&](int first, int, double) {
     double flown = 0, flown_output = 0, flight_total = 0;  // source seconds in flight before `first`
-    const double k = std::sqrt(hulls.gravity.norm() / kCaptureGravity);
+    const double k = std::sqrt(hulls.gravity.norm() / motion::kEarthGravity);
     for (const auto& [a, b] : runs) flight_total += (b - a) / fps;
     for (const auto& [a, b] : runs)
       if (a < first) flown += (b - a) / fps, flown_output += (b - a) / fps / k;

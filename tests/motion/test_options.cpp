@@ -34,6 +34,10 @@ TEST_CASE("FootplantOptions::validate refuses each field out of range") {
       {"FootplantOptions.floor_percentile = -0.1", [](auto& o) { o.floor_percentile = -0.1; }},
       {"FootplantOptions.trim_distance = -0.01", [](auto& o) { o.trim_distance = -0.01; }},
       {"FootplantOptions.rest_window_s = nan", [](auto& o) { o.rest_window_s = kNaN; }},
+      {"FootplantOptions.body_relative = 1.0", [](auto& o) { o.body_relative = 1; }},
+      {"FootplantOptions.run_froude = 0.0", [](auto& o) { o.run_froude = 0; }},
+      {"FootplantOptions.bridge_s = -0.1", [](auto& o) { o.bridge_s = -0.1; }},
+      {"FootplantOptions.bridge_distance = nan", [](auto& o) { o.bridge_distance = kNaN; }},
       {"FootplantOptions.character = -1", [](auto& o) { o.character = -1; }},
   };
   REQUIRE_NOTHROW(FootplantOptions{}.validate());

@@ -6,7 +6,8 @@
 // Detection, per point: height above the floor h(f) and horizontal speed v(f) (central
 // differences over +-k frames, k = max(1, round(fps / 60)), metres per second). A plant starts
 // where h <= height_threshold and v <= the point's speed threshold (speed_threshold, or
-// speed_relative times its 90th-percentile speed when more), and lasts while h <= height_threshold *
+// speed_relative times its 90th-percentile speed, or body_relative times the body's horizontal
+// speed at that frame, whichever is most), and lasts while h <= height_threshold *
 // hysteresis and v <= that threshold * hysteresis; the span's end frames farther than
 // trim_distance from its median position are trimmed off (the roll into and out of a plant),
 // and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest
@@ -42,6 +43,16 @@ struct FootplantOptions {
   // ... or this share of the point's own 90th-percentile horizontal speed when that is more, so
   // that runs get plants: their stance rolls faster than a walk's (0: speed_threshold alone).
   double speed_relative = 0.06;
+  // ... or, where the body runs, this share of its horizontal speed at the frame when that is
+  // more (0: none). A run's stance foot rolls and jitters at 0.2 to 1.5 m/s under a body at
+  // 3.5 m/s, far slower than the body, while a swinging foot is faster. Such plants keep the
+  // ends within body_relative x pace x min_duration_s of their median, where trim_distance is less.
+  double body_relative = 0.35;
+  // The body runs where the Froude number v^2 / (g h) of its pace passes this: v the horizontal
+  // speed of the mean of its joints (over 0.2 s), h that mean's median height above the floor.
+  // 0.5 is the walk-run transition of dynamic similarity (Alexander 1989), about 2.1 m/s for
+  // an adult.
+  double run_froude = 0.5;
   double hysteresis = 1.5;       // leave thresholds = enter thresholds * hysteresis (>= 1)
   double min_duration_s = 0.08;  // shorter spans are dropped
   int min_duration_frames = 3;   // and spans of fewer frames than this

@@ -36,7 +36,6 @@ inline constexpr double kMinFlightRise = 0.05;
 // And only flights that are a parabola: the fit's RMS residual within this share of the rise (the
 // jumps of ../shared/data: 0.5 to 1.4%; a partner's dip in the salsa clip 60_10: 20%).
 inline constexpr double kMaxFlightResidual = 0.05;
-inline constexpr double kEarthGravity = 9.81;  // m/s²
 
 struct InspectOptions {
   FootplantOptions plants{};

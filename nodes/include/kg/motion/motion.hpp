@@ -14,6 +14,10 @@
 
 namespace kg::motion {
 
+// The gravity captured clips obey (m/s²): their flights, the walk-run transition, a retiming's
+// ballistic phases.
+inline constexpr double kEarthGravity = 9.81;
+
 using FrameMatrix = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor>;
 
 struct Motion {

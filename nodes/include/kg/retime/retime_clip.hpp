@@ -37,13 +37,10 @@ enum class RetimeMode {
   TimeOptimal,  // the shortest duration within the hulls (duration and pins ignored)
 };
 
-// The gravity a captured clip obeys, m/s²: a flight held under gravity g plays at √(|g| / this).
-inline constexpr double kCaptureGravity = 9.81;
-
 enum class FlightTiming {
   Free,  // flight frames weigh in the objective like the others (times flight_weight)
   // Every flight (two or more consecutive flight frames) is played at one constant speed, exactly
-  // (TimeWarp holds): ṗ = √(|g| / kCaptureGravity), p̈ = 0, the only ballistic timing under the
+  // (TimeWarp holds): ṗ = √(|g| / motion::kEarthGravity), p̈ = 0, the only ballistic timing under the
   // hulls' gravity g (straight down; another direction: no constant speed is ballistic, and the
   // flights stay free, said in the message). A free solve first finds where each flight plays;
   // the held solve keeps its middle there and the ground phases take the rest of the duration.
