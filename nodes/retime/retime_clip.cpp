@@ -218,6 +218,8 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
     return output_time_of(free, (first + last) / (2 * fps)) - length / 2;
   };
   const auto runs = flight_runs(hulls);
+  out.flights = static_cast<int>(runs.size());
+  double placing_duration = solve.duration;  // the output duration even_ground places flights in
   const FlightPlacement even_ground = [&](int first, int, double) {
     double flown = 0, flown_output = 0, flight_total = 0;  // source seconds in flight before `first`
     const double k = std::sqrt(hulls.gravity.norm() / motion::kEarthGravity);
@@ -225,7 +227,7 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
     for (const auto& [a, b] : runs)
       if (a < first) flown += (b - a) / fps, flown_output += (b - a) / fps / k;
     const double ground_speed =
-        (objective.source_duration() - flight_total) / (solve.duration - flight_total / k);
+        (objective.source_duration() - flight_total) / (placing_duration - flight_total / k);
     if (!(ground_speed > 0) || !std::isfinite(ground_speed)) return where_free(first, first, 0);
     return (first / fps - flown) / ground_speed + flown_output;
   };
@@ -254,6 +256,32 @@ void hold_flights(const PathObjective& objective, const Hulls& hulls, double fps
     out.flight_note = "flights not held: the spline of " + fixed(solve.knot_spacing) +
                       " s knots cannot hold them, even halved twice (they are weighed instead)";
     return;
+  }
+  if (static_cast<int>(held.holds.size()) < out.flights && solve.pins.empty()) {
+    // The shortest duration whose spline holds every flight, between ground phases played evenly.
+    const auto holds_all = [&](double duration) {
+      placing_duration = duration;
+      double unused_speed = 0;
+      std::string unused_note, unused_dropped;
+      const std::vector<Hold> all =
+          flight_holds(hulls, fps, duration, even_ground, unused_speed, unused_note);
+      if (static_cast<int>(all.size()) < out.flights) return false;
+      RetimeOptions trial = solve;
+      trial.duration = duration;
+      for (int attempt = 0; attempt < 3; ++attempt, trial.knot_spacing /= 2)
+        if (compatible_holds(all, objective.source_duration(), trial, unused_dropped).size() == all.size())
+          return true;
+      return false;
+    };
+    double low = solve.duration, high = objective.source_duration() / speed;
+    if (high > low && holds_all(high)) {
+      while (high - low > 1e-3) {
+        const double middle = (low + high) / 2;
+        (holds_all(middle) ? high : low) = middle;
+      }
+      out.duration_holding_flights = high;
+    }
+    placing_duration = solve.duration;
   }
   held.start = held_start(TimeWarp::uniform(objective.source_duration(), held.duration, warp_segments(held)),
                           held.holds, held.pins);
@@ -451,6 +479,18 @@ ClipRetime retime_clip(const Hulls& hulls, std::span<const FrameTorques> torques
                  outside +
                  " outside what their contacts allow (it is written; the shortest physical playback lasts " +
                  fixed(out.shortest->duration) + " s). ";
+  }
+  if (out.flights_held < out.flights && out.flights_held > 0) {
+    std::string flights_headline = "Not ballistic: " + std::to_string(out.flights - out.flights_held) +
+                                   " of " + std::to_string(out.flights) +
+                                   " flights play off their timing under gravity in " +
+                                   fixed(options.solve.duration) +
+                                   " s (the spline cannot hold every flight with "
+                                   "the ground phases between them)";
+    flights_headline += out.duration_holding_flights ? "; the shortest duration that holds them all is " +
+                                                           fixed(*out.duration_holding_flights) + " s. "
+                                                     : ". ";
+    headline = flights_headline + headline;
   }
   out.message = headline + message.str();
   return out;

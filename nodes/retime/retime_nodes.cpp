@@ -366,6 +366,7 @@ class RetimeNode final : public graph::Node {
     ctx.report("share_at_point", r.share_at_point);
     ctx.report("flights_held", static_cast<std::int64_t>(r.flights_held));
     if (r.shortest && r.shortest->feasible) ctx.report("shortest_duration", r.shortest->duration);
+    if (r.duration_holding_flights) ctx.report("duration_holding_flights", *r.duration_holding_flights);
     ctx.report("message", r.message);
     // Time-optimal with no feasible timing, or a strict request out of reach: the report says why
     // (and the shortest feasible duration), nothing else is written.
@@ -380,7 +381,9 @@ class RetimeNode final : public graph::Node {
       w.field("objective", to_string(options.target));
       w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
       w.field("flights", to_string(options.flights));
+      if (options.flights == FlightTiming::Hold) w.field("flights_found", r.flights);
       w.field("flights_held", r.flights_held);
+      if (r.duration_holding_flights) w.field("duration_holding_flights", *r.duration_holding_flights);
       if (r.flights_held > 0) w.field("held_speed", r.held_speed);
       w.field("source_duration", motion.duration());
       w.field("duration", r.warp.duration);

@@ -249,6 +249,38 @@ TEST_CASE("graphs/retime.yaml retimes a captured jump, walk and run to half thei
   if (ran == 0) WARN("skipped: no clip of this test in " << kData);
 }
 
+TEST_CASE("a run whose flights cannot all be held says so, and the duration it names holds them all",
+          "[graphs][retime][data]") {
+  const fs::path clip = kData / "cmu/bvh_daz/09_06.bvh";
+  if (!fs::exists(clip)) {
+    WARN("skipped: " << clip << " not found");
+    return;
+  }
+  TempDir out;
+  const fs::path output = out / "retimed.bvh", report = out / "report.json";
+  const Result half = run_graph(kRetime, {"input=" + clip.string(), "duration_scale=0.5",
+                                          "output=" + output.string(), "report=" + report.string()});
+  INFO(show(half));
+  REQUIRE(half.code == 0);
+  const YAML::Node rep = YAML::LoadFile(report.string());
+  const int found = rep["flights_found"].as<int>();
+  CHECK(found >= 3);  // a stride's flight after each stance
+  REQUIRE(rep["flights_held"].as<int>() < found);
+  CHECK_THAT(rep["message"].as<std::string>(), Catch::StartsWith("Not ballistic: "));
+  const double holding = rep["duration_holding_flights"].as<double>();
+  CHECK(holding > rep["duration"].as<double>());
+  CHECK(holding <= rep["source_duration"].as<double>());
+  // Asked for that duration, every flight is held.
+  const Result longer =
+      run_graph(kRetime, {"input=" + clip.string(), "duration=" + std::to_string(holding + 0.001),
+                          "output=" + output.string(), "report=" + report.string()});
+  INFO(show(longer));
+  REQUIRE(longer.code == 0);
+  const YAML::Node held = YAML::LoadFile(report.string());
+  CHECK(held["flights_held"].as<int>() == found);
+  CHECK_FALSE(held["duration_holding_flights"]);
+}
+
 TEST_CASE(
     "a rigid hop retimed to half its duration: the flight plays at source speed, the stands take the rest",
     "[graphs][retime]") {

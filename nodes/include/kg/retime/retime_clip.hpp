@@ -86,7 +86,12 @@ struct ClipRetime {
   // without one (flight, not exactly physical) are reported by share_at_point, not counted here:
   // captured flights scatter about their least-squares points.
   bool feasible = true;
-  int flights_held = 0;     // FlightTiming::Hold: the flights played at held_speed
+  int flights = 0;       // FlightTiming::Hold: the flights found (runs of frames without contact)
+  int flights_held = 0;  // FlightTiming::Hold: the flights played at held_speed
+  // FlightTiming::Hold with flights not held: the shortest output duration (s) at which the warp's
+  // spline holds every flight (found by bisection between the request and the source's duration
+  // at held_speed, to 1 ms); empty when every flight is held, or pins fix output times.
+  std::optional<double> duration_holding_flights;
   double held_speed = 0;    // source seconds per output second
   std::string flight_note;  // FlightTiming::Hold: what was held, or why nothing was
   std::string message;      // one paragraph for logs: first, in one sentence, what could not be met
