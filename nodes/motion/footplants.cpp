@@ -135,9 +135,10 @@ std::vector<Eigen::Vector3d> point_positions(const Motion& m, const std::vector<
 
 namespace {
 
-// The body's pace where it runs: the horizontal speed (m/s, over +-0.1 s) of the mean of every
-// joint's position (whatever joint carries the translation) at the frames where its Froude number
-// v^2 / (g h) passes run_froude (h: that centre's median height above the floor), else 0.
+// The body's pace where it runs: the horizontal speed (m/s, over +-0.1 s) of the mean of its
+// joints' positions (whatever joint carries the translation; joints that never move, as a static
+// root at the origin, left out) at the frames where its Froude number v^2 / (g h) passes
+// run_froude (h: that centre's median height above the floor), else 0.
 struct BodyPace {
   std::vector<double> pace;  // per frame; 0 where the body walks or stands
   double centre_height = 0;  // m above the floor
@@ -146,16 +147,21 @@ struct BodyPace {
 };
 
 BodyPace running_pace(const Motion& m, double floor, double run_froude) {
-  const Skeleton& sk = *m.skeleton;
   const int frames = m.frame_count();
+  const Eigen::MatrixXd world = joint_world_positions(m);  // frames x 3 joints
+  const Eigen::Index joints = world.cols() / 3;
+  std::vector<Eigen::Index> moving;
+  for (Eigen::Index j = 0; j < joints; ++j) {
+    const auto xyz = world.middleCols(3 * j, 3);
+    if (frames > 0 && (xyz.colwise().maxCoeff() - xyz.colwise().minCoeff()).maxCoeff() > 1e-6)
+      moving.push_back(j);
+  }
   std::vector<Eigen::Vector3d> centre(static_cast<std::size_t>(frames), Eigen::Vector3d::Zero());
-  std::vector<Eigen::Isometry3d> world(static_cast<std::size_t>(sk.joint_count()));
   std::vector<double> heights(static_cast<std::size_t>(frames));
   for (int f = 0; f < frames; ++f) {
-    forward_kinematics(sk, m.values.row(f), world);
     Eigen::Vector3d& c = centre[static_cast<std::size_t>(f)];
-    for (const Eigen::Isometry3d& w : world) c += w.translation();
-    c /= static_cast<double>(std::max<std::size_t>(1, world.size()));
+    for (const Eigen::Index j : moving) c += world.row(f).segment<3>(3 * j).transpose();
+    c /= static_cast<double>(std::max<std::size_t>(1, moving.size()));
     heights[static_cast<std::size_t>(f)] = c.y() - floor;
   }
   BodyPace out;
@@ -260,8 +266,6 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
   const int half_window = static_cast<int>(std::lround(o.rest_window_s * m.fps / 2));
   const int min_frames =
       std::max(o.min_duration_frames, static_cast<int>(std::ceil(o.min_duration_s * m.fps - 1e-9)));
-  // Per point: its runs of min_frames or more within height_threshold of its rest level, and the
-  // warning it would get, said only if no point of its foot is planted during such a run.
   const BodyPace running = running_pace(m, d.floor, o.run_froude);
   if (running.running_frames > 0)
     d.notes.push_back("the body runs at " + std::to_string(running.running_frames) + " of " +
@@ -271,6 +275,8 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
                       " m, the height of its joints' mean above the floor)");
   const std::vector<double> body =
       o.body_relative > 0 && running.running_frames > 0 ? running.pace : std::vector<double>{};
+  // Per point: its runs of min_frames or more within height_threshold of its rest level, and the
+  // warning it would get, said only if no point of its foot is planted during such a run.
   std::vector<std::vector<std::pair<int, int>>> low_runs(np);
   std::vector<std::string> would_warn(np);
   for (std::size_t i = 0; i < np; ++i) {
@@ -302,7 +308,6 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
         while (first < last && (at(first, i) - median).norm() > reach) ++first;
         while (last > first && (at(last, i) - median).norm() > reach) --last;
       }
-
       if (last - first + 1 < min_frames) return;
       // A lift shorter than bridge_s, back to where the point left the floor, is the capture's
       // jitter, not a step: the plant goes on.
@@ -357,7 +362,7 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
     std::vector<double> low_speeds;        // the point's speed at those frames
     bool in = false;
     int start = 0;
-    int by_body = 0;  // frames admitted only by the body's pace
+    int by_body = 0;  // frames kept in a span only by the body's pace
     double by_body_speed = 0, by_body_pace = 0;
     for (int f = 0; f < frames; ++f) {
       const double h = at(f, i).y() - base[static_cast<std::size_t>(f)], v = speed(f);
@@ -388,7 +393,7 @@ FootplantDetection detect_footplants(const Motion& m, const FootplantOptions& o)
                         (by_body == 1 ? "" : "s") + " on the floor at up to " +
                         text::significant(by_body_speed, 3) + " m/s, slower than " +
                         text::significant(100 * o.body_relative, 3) + "% of the body's pace (up to " +
-                        text::significant(by_body_pace, 3) + " m/s; body_relative), taken for stance");
+                        text::significant(by_body_pace, 3) + " m/s; body_relative), kept in stance");
     if (in) close(start, frames - 1);
     if (bridged > 0)
       d.notes.push_back(d.points[i].name + ": " + std::to_string(bridged) + " lift" +

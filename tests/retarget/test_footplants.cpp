@@ -446,6 +446,25 @@ TEST_CASE("footplants on real runs: every foot planted in stance, the body's pac
       CHECK((p.last_frame - p.first_frame + 1) / m.fps <= 0.4);
       CHECK(p.skate < 0.15);
     }
+    // A static root joint at the origin above the figure (the Bandai layout) changes no plant:
+    // joints that never move are not the body.
+    motion::Skeleton rooted;
+    rooted.add_joint({.name = "static_root", .parent = -1});
+    for (int j = 0; j < m.skeleton->joint_count(); ++j) {
+      motion::Joint joint = m.skeleton->joint(j);
+      joint.parent = joint.parent < 0 ? 0 : joint.parent + 1;
+      rooted.add_joint(joint);
+    }
+    rooted.file_to_world = m.skeleton->file_to_world;
+    rooted.source_unit_metres = m.skeleton->source_unit_metres;
+    motion::Motion with_root = m;
+    with_root.skeleton = std::make_shared<const motion::Skeleton>(std::move(rooted));
+    const motion::FootplantDetection r = motion::detect_footplants(with_root, {});
+    REQUIRE(r.plants.size() == d.plants.size());
+    for (std::size_t k = 0; k < d.plants.size(); ++k) {
+      CHECK(r.plants[k].first_frame == d.plants[k].first_frame);
+      CHECK(r.plants[k].last_frame == d.plants[k].last_frame);
+    }
     // Without the body's pace, noisy stances are missed (the reason for the criterion); a clean
     // capture (GAMES-105) has its plants either way.
     motion::FootplantOptions still;

@@ -9,8 +9,10 @@
 // speed_relative times its 90th-percentile speed, or body_relative times the body's horizontal
 // speed at that frame, whichever is most), and lasts while h <= height_threshold *
 // hysteresis and v <= that threshold * hysteresis; the span's end frames farther than
-// trim_distance from its median position are trimmed off (the roll into and out of a plant),
-// and spans shorter than the minimum duration are dropped. Each point's height is measured above its own rest
+// trim_distance from its median position are trimmed off (the roll into and out of a plant;
+// where the body runs, only beyond body_relative x its pace x min_duration_s), spans shorter than
+// the minimum duration are dropped, and two spans of a point parted by a lift shorter than
+// bridge_s that comes back within bridge_distance are one. Each point's height is measured above its own rest
 // level (an ankle rests 7-10 cm above a toe tip): its lowest height within `rest_window_s` around the frame
 // (captured floors slope and drift by centimetres between steps), or with rest_window_s = 0 the
 // `floor_percentile` of its heights over the clip. The floor (for the constraints: above-floor regions) is
