@@ -134,7 +134,7 @@ class Reader : public kg::YamlReader {
                  "; allowed: " + text::join(names),
              r.key_node);
       }
-      radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, "radii." + r.key);
+      radii[static_cast<std::size_t>(index_of(*c))] = positive(r.value, text::key_path("radii", r.key));
     }
   }
 
@@ -145,7 +145,7 @@ class Reader : public kg::YamlReader {
       if (!c.value.IsScalar() || !segment_class_from_string(c.value.Scalar())) {
         const std::string got = c.value.IsScalar() ? c.value.Scalar() : "?";
         const std::string near = kg::nearest_name(got, segment_class_names());
-        fail("classes." + c.key + ": unknown class " + text::in_quotes(got) +
+        fail(text::key_path("classes", c.key) + ": unknown class " + text::in_quotes(got) +
                  (near.empty() ? "" : " (did you mean " + text::in_quotes(near) + "?)") +
                  "; expected one of " + text::join(segment_class_names()),
              c.value);
@@ -183,7 +183,7 @@ class Reader : public kg::YamlReader {
 
   TorqueLimit torque_limit(const Entry& t) const {
     check_pattern(t, "torque_limits");
-    const std::string what = "torque_limits." + t.key;
+    const std::string what = text::key_path("torque_limits", t.key);
     TorqueLimit limit{.pattern = t.key, .values = {}, .where = at(t.key_node)};
     if (t.value.IsSequence()) {
       limit.values = numbers(t.value, what, true);
