@@ -106,8 +106,13 @@ void interpolate_frames(const Skeleton& skeleton, FrameRef a, FrameRef b, double
       const Eigen::Vector3d eb(pb[rot[0]], pb[rot[1]], pb[rot[2]]);
       const Eigen::Quaterniond q =
           slerp_shortest(euler_to_quaternion(order, ea), euler_to_quaternion(order, eb), u);
-      const Eigen::Vector3d e = quaternion_to_euler(q, order, ref);
-      for (int r = 0; r < 3; ++r) po[rot[r]] = e[r];
+      // The Euler solution the input itself would take here: where a joint passes gimbal lock,
+      // an exporter may switch solutions between two frames, and a displacement added to these
+      // angles (retarget.at_rate) means something only on the input's solution.
+      Eigen::Vector3d own;
+      for (int r = 0; r < 3; ++r) own[r] = ea[r] + u * std::remainder(eb[r] - ea[r], 2 * std::numbers::pi);
+      const Eigen::Vector3d e = quaternion_to_euler(q, order, own);
+      for (int r = 0; r < 3; ++r) po[rot[r]] = nearest_angle(e[r], ref[r]);
     } else {
       for (int r = 0; r < order.count; ++r) {
         const double x0 = pa[rot[r]];

@@ -207,6 +207,51 @@ TEST_CASE("resampling through gimbal lock keeps rotations right and curves bound
   CHECK(worst_rotation_step(r) < 1.0);
 }
 
+TEST_CASE("resampling keeps the input's Euler solution where an exporter switches it at gimbal lock",
+          "[resample]") {
+  // A knee-like spine ZXY bending from 60 to 120 degrees about X in 0.4 s, stored as exporters
+  // store it (09_06.bvh's rShin): the middle angle within +-90, so past 90 the file switches to
+  // the other solution (Z + 180, 180 - X, Y + 180). A displacement added to the resampled angles
+  // (retarget.at_rate) means something only on the file's own solution.
+  Motion m{body(), FrameMatrix::Zero(49, 12), 120.0, "knee"};
+  for (int f = 0; f < m.frame_count(); ++f) {
+    const double t = f / 48.0;
+    double z = 0.05 + 0.1 * t, x = (60 + 60 * t) * kPi / 180, y = -0.08 + 0.1 * t;
+    if (x > kPi / 2) {
+      z = wrap_angle(z + kPi);
+      x = kPi - x;
+      y = wrap_angle(y + kPi);
+    }
+    m.values(f, 6) = z;
+    m.values(f, 7) = x;
+    m.values(f, 8) = y;
+  }
+  for (double new_fps : {25.0, 50.0, 47.0}) {
+    INFO("-> " << new_fps << " fps");
+    const Motion r = resample(m, new_fps);
+    int compared = 0;
+    for (int k = 0; k < r.frame_count(); ++k) {
+      const double s = k * 120.0 / new_fps;
+      const int f0 = static_cast<int>(std::floor(s + 1e-9));
+      const int f1 = std::min(f0 + 1, m.frame_count() - 1);
+      const double u = s - f0 < 1e-9 ? 0 : s - f0;
+      const Eigen::Quaterniond qa(joint_rotation(m, 1, f0)), qb(joint_rotation(m, 1, f1));
+      CHECK((joint_rotation(r, 1, k) - qa.slerp(u, qb).toRotationMatrix()).cwiseAbs().maxCoeff() < 1e-9);
+      // Away from the switch, every angle is the file's own, interpolated.
+      bool same_solution = true;
+      for (int c = 6; c <= 8; ++c)
+        same_solution &= std::abs(std::remainder(m.values(f1, c) - m.values(f0, c), 2 * kPi)) < 0.2;
+      if (!same_solution) continue;
+      ++compared;
+      for (int c = 6; c <= 8; ++c) {
+        const double own = m.values(f0, c) + u * std::remainder(m.values(f1, c) - m.values(f0, c), 2 * kPi);
+        CHECK(std::abs(std::remainder(r.values(k, c) - own, 2 * kPi)) < 0.01);
+      }
+    }
+    CHECK(compared >= r.frame_count() - 1);
+  }
+}
+
 TEST_CASE("pose_at samples frames, clamps the ends and refuses nonsense", "[resample]") {
   const Motion m = smooth_clip(25, 24.0);
   for (int f = 0; f < m.frame_count(); ++f) CHECK((pose_at(m, f / 24.0) - m.values.row(f)).isZero(0));

@@ -2,8 +2,10 @@
 // (McCann et al. resampled 120 Hz captures to 30 Hz). Position channels are interpolated
 // linearly. Each joint's rotation channels move together: with three rotation channels the two
 // frames' rotations are slerped along the shorter arc and converted back to the joint's own Euler
-// order, choosing the angles nearest a reference (the previous output frame), so curves stay
-// continuous through +-180 degrees and gimbal lock. With one or two rotation channels each angle
+// order: the Euler solution is the one nearest the two frames' own angles interpolated, so the
+// curves are the input's (where an exporter switched solutions at gimbal lock between two
+// frames, so does the result), and whole turns follow a reference (the previous output frame), so
+// curves stay continuous through +-180 degrees. With one or two rotation channels each angle
 // is interpolated along its shorter way round; for one channel that is exactly the slerp, and
 // for two it stays inside the joint's two degrees of freedom, which a slerp would leave.
 //
@@ -19,16 +21,17 @@
 namespace kg::motion {
 
 // The frame between a and b (channel_count() values each, skeleton.hpp's units) at fraction
-// u in [0, 1] (0 gives a, 1 gives b; values outside are clamped). Rotation angles are brought
-// nearest `reference` (a frame of the same layout, usually the previous output) by the choice of
-// Euler solution; at u == 0 and u == 1 the source frame's angles are kept, each only shifted by
-// whole turns towards the reference. `out` must not alias a or b; it may alias reference.
+// u in [0, 1] (0 gives a, 1 gives b; values outside are clamped). Of a three-channel rotation,
+// the Euler solution nearest a and b's angles interpolated, each angle then shifted by whole
+// turns nearest `reference` (a frame of the same layout, usually the previous output); at
+// u == 0 and u == 1 the source frame's angles are kept, shifted so too. `out` must not alias a or b; it may
+// alias reference.
 void interpolate_frames(const Skeleton& skeleton, FrameRef a, FrameRef b, double u, FrameRef reference,
                         Eigen::Ref<Eigen::RowVectorXd> out);
 
 // The pose at `time` seconds from the first frame (clamped to [0, duration()]); frame f lies at
-// f / fps. Within 1e-9 frames of a frame time the frame itself is used. The Euler solution is the
-// one nearest `reference`, or without one nearest the closer of the two surrounding frames.
+// f / fps. Within 1e-9 frames of a frame time the frame itself is used. Whole turns follow
+// `reference`, or without one the closer of the two surrounding frames.
 // Throws std::invalid_argument for a motion without frames or a non-finite time.
 void pose_at(const Motion& motion, double time, FrameRef reference, Eigen::Ref<Eigen::RowVectorXd> out);
 void pose_at(const Motion& motion, double time, Eigen::Ref<Eigen::RowVectorXd> out);
