@@ -183,33 +183,49 @@ TEST_CASE("graphs/retarget.yaml retargets real walks to a smaller, a short-legge
 
 TEST_CASE("graphs/retarget.yaml written below the input's rate: every plant checked, each its own",
           "[graphs][data]") {
-  const fs::path clip = kData / "cmu/bvh_motionbuilder/16_15.bvh";
-  if (!fs::exists(clip)) {
-    WARN("skipped: " << clip << " not found");
-    return;
-  }
-  TempDir out;
-  const kg::io::ImportedMotion source = kg::io::import_motion(clip.string(), "", {});
-  for (const int output_fps : {30, 24}) {
-    const fs::path output = out / "result.bvh", report = out / "metrics.json";
-    const Result r = kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set",
-                                "input=" + clip.string(), "--set", "output_fps=" + std::to_string(output_fps),
-                                "--set", "output=" + output.string(), "--set", "report=" + report.string()});
-    INFO("output_fps " << output_fps << "\n" << show(r));
-    REQUIRE(r.code == 0);
-    const auto result = kg::io::read_bvh(output).motion;
-    CHECK(result.fps == Approx(output_fps));
-    CHECK(std::abs(result.duration() - source.motion.duration()) <= 1.0 / output_fps + 1e-6);
-    const YAML::Node metrics = YAML::LoadFile(report.string());
-    CHECK(metrics["frames"].as<int>() == result.frame_count());
-    CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
-    CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.2);
-    // Plants keep their own labels at the coarse rate: none merges into the next of its foot.
-    std::set<std::string> labels;
-    for (const YAML::Node& plant : metrics["foot_skate_cm"]["plants"])
-      labels.insert(plant["label"].as<std::string>());
-    CHECK(labels.size() == metrics["foot_skate_cm"]["plants"].size());
-    CHECK(labels.size() >= 8);
+  // 24 and 30 Hz divide 120; 25, 47 and 50 do not, so most frames written fall between the solve's,
+  // where retarget.at_rate holds the constraints by per-frame IK. 09_06's right knee passes gimbal
+  // lock in its stance, where the file switches Euler solutions (a resampling off the file's
+  // solution put that toe 2.3 cm under the floor at 25 Hz).
+  struct Case {
+    fs::path clip;
+    std::vector<int> rates;
+  };
+  const std::vector<Case> cases{{kData / "cmu/bvh_motionbuilder/16_15.bvh", {30, 24, 50}},
+                                {kData / "cmu/bvh_daz/09_06.bvh", {25, 47}}};
+  for (const Case& c : cases) {
+    if (!fs::exists(c.clip)) {
+      WARN("skipped: " << c.clip << " not found");
+      continue;
+    }
+    TempDir out;
+    const kg::io::ImportedMotion source = kg::io::import_motion(c.clip.string(), "", {});
+    std::size_t plants_at_first_rate = 0;
+    for (const int output_fps : c.rates) {
+      const fs::path output = out / "result.bvh", report = out / "metrics.json";
+      const Result r =
+          kinegraph({"run", (kSource / "graphs/retarget.yaml").string(), "--set", "input=" + c.clip.string(),
+                     "--set", "output_fps=" + std::to_string(output_fps), "--set",
+                     "output=" + output.string(), "--set", "report=" + report.string()});
+      INFO(c.clip.filename() << " at output_fps " << output_fps << "\n" << show(r));
+      REQUIRE(r.code == 0);
+      CHECK_THAT(r.err, Catch::Contains("hold: the constraints held at the rate written"));
+      const auto result = kg::io::read_bvh(output).motion;
+      CHECK(result.fps == Approx(output_fps));
+      CHECK(std::abs(result.duration() - source.motion.duration()) <= 1.0 / output_fps + 1e-6);
+      const YAML::Node metrics = YAML::LoadFile(report.string());
+      CHECK(metrics["frames"].as<int>() == result.frame_count());
+      CHECK(metrics["violation"]["worst_cm"].as<double>() <= 0.1);
+      CHECK(metrics["foot_skate_cm"]["worst"].as<double>() <= 0.1);
+      // Plants keep their own labels at the coarse rate: none merges into the next of its foot.
+      std::set<std::string> labels;
+      for (const YAML::Node& plant : metrics["foot_skate_cm"]["plants"])
+        labels.insert(plant["label"].as<std::string>());
+      CHECK(labels.size() == metrics["foot_skate_cm"]["plants"].size());
+      if (plants_at_first_rate == 0) plants_at_first_rate = labels.size();
+      CHECK(labels.size() == plants_at_first_rate);
+      CHECK(labels.size() >= 4);
+    }
   }
 }
 
