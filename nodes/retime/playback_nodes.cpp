@@ -43,7 +43,7 @@ graph::NodeType playback_node_type() {
           "Plays a clip through a retiming (retime.retime's warp, p(t) in source seconds, so any rate of "
           "the clip plays it): frame k at k / fps is the clip's pose at p(k / fps), positions linear and "
           "rotations slerped. A retiming worked out at 30 Hz thus writes a 120 Hz capture at 120 Hz, with "
-          "its own detail.",
+          "its own detail; the capture's last frames past its 30 Hz copy's end play at the warp's end speed.",
       .inputs = {{"motion", "kg.Motion", true, "the clip to play, at any rate"},
                  {"warp", "kg.TimeWarp", true, "the retiming (retime.retime)"},
                  {"source", "kg.Motion", false,

@@ -548,10 +548,12 @@ class WriteCurvesNode final : public graph::Node {
 
   void run(RunContext& ctx) const override {
     const TimeWarp& warp = ctx.input<TimeWarp>("warp");
-    const double fps = ctx.input<motion::Motion>("motion").fps;
+    const motion::Motion& played = ctx.input<motion::Motion>("motion");
     const bool json = path_.size() >= 5 && path_.substr(path_.size() - 5) == ".json";
+    // A row per frame played, past the warp's end too (played_sample).
     write_sink_file(ctx, path_, [&](std::ostream& os) {
-      json ? write_warp_json(os, warp, fps) : write_warp_csv(os, warp, fps);
+      json ? write_warp_json(os, warp, played.fps, played.frame_count())
+           : write_warp_csv(os, warp, played.fps, played.frame_count());
     });
   }
 

@@ -79,8 +79,10 @@ fs::path write_rigid_clip(const TempDir& dir, const std::string& name, int frame
 constexpr double kHopStand = 1.0, kHopHeight = 0.3, kG = 9.81;
 const double kHopV = std::sqrt(2 * kG * kHopHeight), kHopFlight = 2 * kHopV / kG;
 
-fs::path write_hop(const TempDir& dir) {
-  const int frames = static_cast<int>((2 * kHopStand + kHopFlight) * 120) + 1;
+// It lasts a whole number of 30 Hz frames, so the working copy of the retiming graphs lasts as
+// long as it does; `extra` 120 Hz frames more make a clip that outlasts its copy.
+fs::path write_hop(const TempDir& dir, int extra = 0) {
+  const int frames = 4 * static_cast<int>(std::ceil((2 * kHopStand + kHopFlight) * 30)) + 1 + extra;
   return write_rigid_clip(dir, "hop", frames, [](double t, Eigen::Vector3d p) {
     const double s = t - kHopStand;
     if (s > 0 && s < kHopFlight) p.y() += kHopV * s - 0.5 * kG * s * s;
@@ -148,11 +150,18 @@ YAML::Node check_report(const fs::path& path, double duration_scale, double sour
 }
 
 // The retimed clip: at `fps` (the input's rate, output_fps' default), the frames its duration
-// gives, the source's skeleton.
-void check_retimed_clip(const fs::path& path, double duration, int joints, double fps) {
+// gives, the source's skeleton. A clip `tail` source seconds longer than its 30 Hz working copy
+// plays that tail at the warp's end speed (exactly: the test "a clip that outlasts ..."); here
+// the bound is an end played at a quarter of source speed or faster.
+void check_retimed_clip(const fs::path& path, double duration, int joints, double fps, double tail = 0) {
   const kg::motion::Motion m = kg::io::read_bvh(path).motion;
   CHECK(m.fps == Approx(fps));
-  CHECK(m.frame_count() == output_frames(duration, fps));
+  if (tail == 0) {
+    CHECK(m.frame_count() == output_frames(duration, fps));
+  } else {
+    CHECK(m.frame_count() >= output_frames(duration, fps));
+    CHECK(m.frame_count() <= output_frames(duration + tail / 0.25, fps));
+  }
   CHECK(m.skeleton->joint_count() == joints);
 }
 
@@ -161,11 +170,13 @@ struct Source {
   double duration = 0;
   int joints = 0;
   double rate = 0;
+  double tail = 0;  // seconds of the clip past its working copy's last frame
 };
 Source source_at_30(const fs::path& clip, double fps = 0) {
   const kg::io::ImportedMotion in = kg::io::import_motion(clip.string(), "", {.fps = fps});
   const int frames = kg::motion::resampled_frame_count(in.motion.frame_count(), in.motion.fps, kFps);
-  return {(frames - 1) / kFps, in.motion.skeleton->joint_count(), in.motion.fps};
+  return {(frames - 1) / kFps, in.motion.skeleton->joint_count(), in.motion.fps,
+          in.motion.duration() - (frames - 1) / kFps};
 }
 
 // A graph variable's default (graphs document theirs at the top).
@@ -230,7 +241,7 @@ TEST_CASE("graphs/retime.yaml retimes a captured jump, walk and run to half thei
     REQUIRE(r.code == 0);
     const Source source = source_at_30(clip.path, clip.fps);
     const YAML::Node rep = check_report(report, 0.5, source.duration);
-    check_retimed_clip(output, 0.5 * source.duration, source.joints, source.rate);
+    check_retimed_clip(output, 0.5 * source.duration, source.joints, source.rate, source.tail);
     CHECK(rep["output_frames"].as<int>() == output_frames(0.5 * source.duration));  // at the working rate
     if (clip.flight)
       CHECK(rep["frames_flight"].as<int>() > 0);
@@ -360,6 +371,34 @@ TEST_CASE("the report counts the frames written at the output fps, not at the hu
     CHECK(rep["output_frames"].as<int>() == written);
     CHECK_FALSE(rep["failed"].as<bool>());
   }
+}
+
+TEST_CASE("a clip that outlasts its 30 Hz working copy is played to its last frame", "[graphs][retime]") {
+  // 2 frames at 120 Hz past the copy's last frame (1/60 s): the warp ends there, and its end speed
+  // plays the rest (before, 13_13.bvh retimed at duration_scale 1 lost 2 of its 435 frames).
+  TempDir dir;
+  const fs::path hop = write_hop(dir, 2);
+  const kg::motion::Motion source = kg::io::read_bvh(hop).motion;
+  const fs::path output = dir / "out.bvh", curves = dir / "curves.csv";
+  const Result r = run_graph(
+      kRetime, {"input=" + hop.string(), "trim=none", "duration_scale=1", "output=" + output.string(),
+                "report=" + (dir / "r.json").string(), "curves=" + curves.string()});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  const kg::motion::Motion m = kg::io::read_bvh(output).motion;
+  const auto rows = read_curves(curves);
+  REQUIRE(static_cast<int>(rows.size()) == m.frame_count());
+  const Source copy = source_at_30(hop);
+  REQUIRE(source.duration() - copy.duration == Approx(2 / 120.0));
+  // The last frame written plays within one frame of the clip's end, and none plays past it.
+  const auto& last = rows.back();
+  CHECK(last[0] > copy.duration);
+  CHECK(last[1] <= source.duration() + 1e-9);
+  CHECK(source.duration() - last[1] < last[2] / m.fps + 1e-9);
+  CHECK(m.frame_count() >= source.frame_count() - 1);
+  // Past the warp's end, the end speed: p'' = 0 and p' constant.
+  CHECK(last[3] == 0);
+  CHECK(last[2] == Approx(rows[rows.size() - 2][2]));
 }
 
 TEST_CASE("graphs/retime/gravity.yaml on the rigid hop: the flight plays at ṗ² = g'/g under each gravity",
@@ -504,7 +543,8 @@ TEST_CASE("the graphs of graphs/retime/ reproduce the paper's experiments on the
     const double scale = std::stod(default_of(graph, "duration_scale"));
     for (const auto& [bvh, report] : c.outputs) {
       check_report(files[report + "@" + c.graph], scale, source.duration);
-      check_retimed_clip(files[bvh + "@" + c.graph], scale * source.duration, source.joints, source.rate);
+      check_retimed_clip(files[bvh + "@" + c.graph], scale * source.duration, source.joints, source.rate,
+                         source.tail);
     }
   }
 

@@ -62,3 +62,26 @@ TEST_CASE("output_frame_count is the frames written at the output rate, and refu
   CHECK_THROWS_WITH(retime::output_frame_count(long_warp, 1e5),
                     "retimed playback: 10000 s at fps 100000 is 1e+09 frames (expected at most 10000000)");
 }
+
+TEST_CASE("a clip that outlasts the warp's source by its slack plays its tail at the warp's end speed") {
+  // 2.1 s of clip, a warp of its first 2 s at double speed: the last 0.1 s plays at 2x too.
+  const motion::Motion source = ramp(64, 30);
+  const retime::TimeWarp warp = retime::TimeWarp::uniform(2.0, 1.0, 10);
+  CHECK(retime::played_duration(warp, source.duration()) == Approx(1.05));
+  CHECK(retime::played_duration(warp, 1.9) == 1.0);  // no tail: the warp's duration
+  const retime::WarpSample past = retime::played_sample(warp, 1.04);
+  CHECK(past.p == Approx(2.08));
+  CHECK(past.pdot == Approx(2));
+  CHECK(past.pddot == 0);
+  const motion::Motion out = retime::retimed_motion(source, warp, 60, 0.1);
+  REQUIRE(out.frame_count() == 64);  // floor(1.05 * 60) + 1: every source frame, to the last
+  for (int k = 0; k < 64; ++k) CHECK(out.values(k, 0) == Approx(source.values(k, 0)).margin(1e-9));
+  std::ostringstream csv;
+  retime::write_warp_csv(csv, warp, 60, out.frame_count());
+  std::istringstream lines(csv.str());
+  std::string line, last;
+  int rows = -1;
+  while (std::getline(lines, line)) ++rows, last = line;
+  CHECK(rows == 64);
+  CHECK(last.rfind("1.05,2.1,2,0", 0) == 0);
+}
