@@ -69,7 +69,7 @@ TEST_CASE("parse_yaml: a flow map as the first key of a block map is not mistake
   CHECK_THAT(error_of("{a: 1}: x\n{a: 1}: y\n"), Contains("(accepted)"));  // non-scalar keys: not compared
 }
 
-TEST_CASE("parse_yaml: malformed YAML at its place; nesting beyond yaml-cpp's limit refused", "[yaml]") {
+TEST_CASE("parse_yaml: malformed YAML at its place, nesting beyond yaml-cpp's limit refused", "[yaml]") {
   CHECK_THAT(error_of("a: [1, 2\n"), Contains("f.yaml:"));
   CHECK_THAT(error_of("a: [1, 2\n"), Contains("malformed YAML"));
   CHECK_THAT(error_of(std::string(30000, '[') + std::string(30000, ']')), Contains("malformed YAML"));

@@ -287,7 +287,8 @@ TEST_CASE("items writing the same output fail instead of overwriting each other 
 }
 
 TEST_CASE(
-    "an edited graph fails the items that have not started; a second batch into the same folder is refused",
+    "an edited graph fails the items that have not started, and a second batch into the same folder is "
+    "refused",
     "[batch]") {
   Setup s;
   for (int i = 0; i < 3; ++i) s.input("n" + std::to_string(i) + ".txt", std::to_string(i));
@@ -349,7 +350,8 @@ TEST_CASE("a worker killed outright fails its item only and leaves no temporary 
 }
 
 TEST_CASE(
-    "inputs: a list names files as written, a missing one fails its item; outputs under --out are no inputs",
+    "inputs: a list names files as written, a missing one fails its item, and outputs under --out are no "
+    "inputs",
     "[batch]") {
   Setup s;
   s.input("take[1].txt", "1");

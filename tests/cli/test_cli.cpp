@@ -164,7 +164,7 @@ TEST_CASE("the forms of an option's value: attached, empty, and a flag given one
   }
 }
 
-TEST_CASE("run: --set, outputs, a summary; --report JSON", "[cli]") {
+TEST_CASE("run: --set, outputs, a summary, --report JSON", "[cli]") {
   TempDir dir;
   const fs::path graph = dir.write("sum.yaml", kSumGraph);
   const fs::path out = dir / "out" / "sum.txt";
@@ -652,7 +652,7 @@ TEST_CASE("a fuzzed joint-name pattern fails at its file:line with a short excer
   }
 }
 
-TEST_CASE("inspect: the motion doctor on a clip, as text and JSON; bad clips exit non-zero", "[cli]") {
+TEST_CASE("inspect: the motion doctor on a clip, as text and JSON, bad clips exit non-zero", "[cli]") {
   const fs::path clip = fs::path(KG_DATA_DIR) / "cmu/bvh_cmu_names/16_01.bvh";
   SECTION("16_01.bvh says 30 fps: its jump's flight says 120, and the fix is given") {
     if (!fs::exists(clip)) {

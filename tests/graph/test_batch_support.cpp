@@ -249,7 +249,7 @@ TEST_CASE("Sha256 gives the same digest however the bytes are split into update 
   }
 }
 
-TEST_CASE("a copied Sha256 goes on from the bytes hashed so far; a moved one is the same hash") {
+TEST_CASE("a copied Sha256 goes on from the bytes hashed so far, a moved one is the same hash") {
   Sha256 ab;
   ab.update("ab");
   Sha256 abc = ab;  // the copy's state is its own
@@ -351,7 +351,7 @@ TEST_CASE("expand_file_patterns: results are absolute, lexically normal, sorted 
         std::vector<fs::path>{here / "b" / "w.bvh", here / "c" / "d" / "deep.bvh", here / "top.bvh"});
 }
 
-TEST_CASE("expand_file_patterns: a plain path names one file; symbolic links are followed") {
+TEST_CASE("expand_file_patterns: a plain path names one file, symbolic links are followed") {
   const PatternTree t;
   CHECK(expand_file_patterns({t("c/d/e/deeper.bvh")}) == t.files({"c/d/e/deeper.bvh"}));
   CHECK(expand_file_patterns({t(".hidden.bvh")}) == t.files({".hidden.bvh"}));
@@ -454,7 +454,7 @@ TEST_CASE("parse_manifest_line says what is wrong with a line") {
       Catch::Contains("\"figures\" is not an object"));
 }
 
-TEST_CASE("read_manifest skips torn and garbage lines, naming file:line; a missing file is empty") {
+TEST_CASE("read_manifest skips torn and garbage lines, naming file:line, a missing file is empty") {
   TempDir dir;
   const ManifestRecord a = full_record();
   const ManifestRecord b = record("/in/b.bvh", "2026-01-01T00:00:01Z", "h2");

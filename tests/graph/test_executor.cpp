@@ -581,7 +581,7 @@ connections:
   CHECK_FALSE(NodeSpec{"test.pure", 1, ""}.has_side_effects());
 }
 
-TEST_CASE("an output kept on failure reaches its consumers; the others skip", "[cache]") {
+TEST_CASE("an output kept on failure reaches its consumers, the others skip", "[cache]") {
   Registry registry = kg_test::test_registry();
   auto string_port = [](const std::string& name) { return PortSpec{name, "kg.String", true, "text"}; };
   PortSpec why = string_port("why");

@@ -657,7 +657,7 @@ TEST_CASE(
   CHECK(checked >= 7);
 }
 
-TEST_CASE("every graph that solves writes at the input's rate by default; retimings solve at 30 Hz",
+TEST_CASE("every graph that solves writes at the input's rate by default, retimings solve at 30 Hz",
           "[graphs]") {
   for (const auto& entry : fs::recursive_directory_iterator(kSource / "graphs")) {
     if (entry.path().extension() != ".yaml") continue;

@@ -129,8 +129,9 @@ TEST_CASE("inspect refuses a clip too short and bad options", "[io][inspect]") {
   CHECK_THROWS_WITH(bad.validate(), Catch::Contains("min_flight_frames"));
 }
 
-TEST_CASE("inspect: runs get plants at their own speed; an ankle rolling over its planted toe is no warning",
-          "[io][inspect][data]") {
+TEST_CASE(
+    "inspect: runs get plants at their own speed, and an ankle rolling over its planted toe is no warning",
+    "[io][inspect][data]") {
   // games105's run_forward at 60 Hz: every point's stance rolls faster than a walk's 0.15 m/s;
   // the threshold is 6% of each point's 90th-percentile speed (0.35 to 0.45 m/s there).
   const auto run = read("other_skeletons/games105/run_forward.bvh");
@@ -141,9 +142,11 @@ TEST_CASE("inspect: runs get plants at their own speed; an ankle rolling over it
   const MotionInspection i = inspect_motion(*run);
   INFO(kg::text::join(i.summary, "\n"));
   for (const auto& p : i.plants) CHECK(p.spans.size() >= 1);
-  // The same run without the relative threshold: no plant on at least one point, and a warning.
+  // The same run without the relative thresholds (of the point's own speeds, of the body's pace):
+  // no plant on at least one point, and a warning.
   kg::motion::InspectOptions fixed;
   fixed.plants.speed_relative = 0;
+  fixed.plants.body_relative = 0;
   const MotionInspection slow = inspect_motion(*run, fixed);
   int without = 0;
   for (const auto& p : slow.plants) without += p.spans.empty();

@@ -136,7 +136,7 @@ TEST_CASE("trim auto: a clip that moves, then jumps to its rest pose, keeps ever
   if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
 }
 
-TEST_CASE("trim FIRST..LAST keeps those frames; bad values are refused with the range") {
+TEST_CASE("trim FIRST..LAST keeps those frames, bad values are refused with the range") {
   auto path = kg::test::data_file("other_skeletons/games105/walk60.bvh");
   if (!path) {
     WARN("skipped: other_skeletons/games105/walk60.bvh not found");

@@ -254,7 +254,7 @@ TEST_CASE("joint_world_positions lists every joint origin per frame", "[kinemati
   }
 }
 
-TEST_CASE("joint_rotation is the local rotation; set_joint_rotation writes it back nearest", "[kinematics]") {
+TEST_CASE("joint_rotation is the local rotation, set_joint_rotation writes it back nearest", "[kinematics]") {
   const auto s = mixed_skeleton();
   std::mt19937 rng(21);
   for (int t = 0; t < 20; ++t) {

@@ -112,7 +112,7 @@ TEST_CASE("motion.resample fails clearly on bad params and inputs", "[nodes]") {
   CHECK(bad_clip.outputs.empty());
 }
 
-TEST_CASE("motion.frame_range keeps a range of frames; frame_range refuses ranges outside the clip",
+TEST_CASE("motion.frame_range keeps a range of frames, frame_range refuses ranges outside the clip",
           "[nodes]") {
   const graph::Registry registry = kg::test::registry_of(motion_node_types());
   const motion::Motion m = clip(10, 120);

@@ -42,7 +42,7 @@ TEST_CASE("channel kinds print as BVH names and parse back", "[skeleton]") {
   CHECK(axis_index(K::Zposition) == 2);
 }
 
-TEST_CASE("add_joint numbers channels; lookups find joints and channels", "[skeleton]") {
+TEST_CASE("add_joint numbers channels, lookups find joints and channels", "[skeleton]") {
   Skeleton s;
   CHECK(s.add_joint(joint(
             "hip", -1,

@@ -529,7 +529,8 @@ TEST_CASE("retarget.footplants node") {
 }
 
 TEST_CASE(
-    "a point that rests at its floor level but gets no plant is a warning with the numbers; strict fails") {
+    "a point that rests at its floor level but gets no plant is a warning with the numbers, and strict "
+    "fails") {
   // Issue 14: runs got 0 plants and nothing said so. The synthesized walk with its body drifting
   // sideways at 0.4 m/s (a capture whose feet slide, or a run's rolling stance): no plant.
   synth::Synthesis walk = synth::synthesize_walk({.steps = 4, .speed = 1.2, .stature = 1.75, .fps = 60});

@@ -97,7 +97,7 @@ TEST_CASE("holds: bad input") {
   CHECK_THROWS(detect_holds(a, broken, {.points_a = {"LeftHand"}, .points_b = {"LeftHand"}}));
 }
 
-TEST_CASE("holds: hysteresis keeps a hold through a brief parting; short holds are dropped") {
+TEST_CASE("holds: hysteresis keeps a hold through a brief parting, short holds are dropped") {
   // The close pair's distance swings between about 0 and 0.37 m with the arms.
   const auto [a, b] = side_by_side(0.5);
   const HoldOptions tight{

@@ -476,7 +476,7 @@ TEST_CASE("the data's skeletons: classes, masses by class, CoM height, floating 
   }
 }
 
-TEST_CASE("CMU 16.asf: each side's limb mass, shared by bone length; the root carries the pelvis",
+TEST_CASE("CMU 16.asf: each side's limb mass, shared by bone length, the root carries the pelvis",
           "[retime][body][data]") {
   const fs::path asf = kData / "cmu/asf_amc/16.asf", amc = kData / "cmu/asf_amc/16_15.amc";
   if (!fs::exists(asf) || !fs::exists(amc)) {

@@ -157,7 +157,7 @@ TEST_CASE("The sectors cover the plane and λ is continuous across them", "[forc
   }
 }
 
-TEST_CASE("Outside the hull λ extends linearly; at a boundary centre, constant along the normals",
+TEST_CASE("Outside the hull λ extends linearly, at a boundary centre, constant along the normals",
           "[force_model]") {
   std::vector<Case> all = cases();
   const Case& vertex = all[1];

@@ -32,7 +32,7 @@ TEST_CASE("playing a clip through a uniform warp at double speed keeps every oth
   CHECK(out.fps == 30);
 }
 
-TEST_CASE("a warp for another clip's duration is refused; curves are written per output frame") {
+TEST_CASE("a warp for another clip's duration is refused, curves are written per output frame") {
   const motion::Motion source = ramp(61, 30);
   CHECK_THROWS_WITH(retime::retimed_motion(source, retime::TimeWarp::uniform(3.0, 1.0, 10), 30),
                     Catch::Matchers::Contains("lasts 2"));

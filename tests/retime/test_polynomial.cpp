@@ -57,7 +57,7 @@ TEST_CASE("monomials multiply, order canonically and print") {
   CHECK((path_terms::k * path_terms::pdot2).to_string(kPathVariableNames) == "pdot^2*k");
 }
 
-TEST_CASE("bases are sorted sets; products and unions hold exactly the expected monomials") {
+TEST_CASE("bases are sorted sets, products and unions hold exactly the expected monomials") {
   STATIC_REQUIRE(std::is_same_v<SortedBasis<y, x, y>, Basis<x, y>>);
   STATIC_REQUIRE(Linear::size == 2);
   using P = ProductBasis<Linear::BasisType, Linear::BasisType>;
@@ -100,7 +100,7 @@ TEST_CASE("arithmetic agrees with evaluation at random points") {
   }
 }
 
-TEST_CASE("coefficients are found by monomial; absent monomials read as zero") {
+TEST_CASE("coefficients are found by monomial, absent monomials read as zero") {
   const Linear p = Linear::term<x>(2.0) + Linear::term<y>(3.0);
   const auto q = p * p;  // 4x² + 12xy + 9y²
   CHECK(q.coefficient<x * x>() == 4);

@@ -122,7 +122,7 @@ TEST_CASE("warp constraints refuse contradictory and misplaced pins, and segment
              Contains("use shorter segments"));
 }
 
-TEST_CASE("holds fix the controls of the segments they meet to their line; holds that disagree are refused") {
+TEST_CASE("holds fix the controls of the segments they meet to their line, holds that disagree are refused") {
   const Hold hold{.source_start = 1.0, .output_start = 0.55, .length = 0.3, .speed = 1.0};
   // 20 segments of 0.1 s: the hold meets segments 5 to 8 (0.5 to 0.9 s), whose controls are 5 to 11.
   CHECK(held_segments(hold, 2.0, 20) == std::pair<int, int>{5, 9});
