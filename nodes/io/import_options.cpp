@@ -30,9 +30,10 @@ constexpr NamedUnit kUnits[] = {
     {"m", 1.0}, {"cm", 0.01}, {"mm", 0.001}, {"inch", 0.0254}, {"asf", 0.0254 / 0.45},
 };
 
-// A standing adult: what `auto` aims at, and the band it calls plausible.
+// A standing adult: what `auto` aims at; and the band of human heights it calls plausible, from a
+// newborn (or a character a retargeting made 0.6 of a small adult) to the tallest adults.
 constexpr double kTypicalHeight = 1.7;
-constexpr double kPlausibleMin = 1.0;
+constexpr double kPlausibleMin = 0.5;
 constexpr double kPlausibleMax = 2.3;
 // `auto` up picks z only when Z's extent exceeds Y's by this factor, and looks at this many
 // frames spread through the clip.
@@ -318,6 +319,14 @@ std::vector<std::string> apply_import_options(motion::Motion& m, const ImportOpt
       if (h < kPlausibleMin || h > kPlausibleMax)
         note += "; no unit gives a human height of " + fmt("%.1f", kPlausibleMin) + ".." +
                 fmt("%.1f", kPlausibleMax) + " m, this one comes closest: set units if it is wrong";
+      // Another human height: the clip cannot tell (a retargeted figure keeps its source's timing,
+      // so neither its flights nor its gait say its size); the user can.
+      for (const NamedUnit& u : kUnits) {
+        const double other = height * u.metres;
+        if (&u != best && other >= kPlausibleMin && other <= kPlausibleMax)
+          note += "; " + std::string(u.name) + " would make it " + fmt("%.2f", other) +
+                  " m: set units=" + u.name + " if it is";
+      }
       notes.push_back(note);
     }
   } else {

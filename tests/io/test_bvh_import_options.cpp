@@ -163,7 +163,7 @@ TEST_CASE("import options: a Z-up file is found Z-up, turned +Y up, and said so"
   CHECK(contains(notes_y, "not a human height"));  // 0.08 m along Y
 }
 
-TEST_CASE("import options: lengths, End Sites, position values and limits scale; angles do not") {
+TEST_CASE("import options: lengths, End Sites, position values and limits scale, angles do not") {
   kg::motion::Skeleton s;
   kg::motion::Joint root;
   root.name = "root";
@@ -355,6 +355,52 @@ TEST_CASE("import options: a static root joint above the figure changes neither 
     CHECK(after.motion.skeleton->source_unit_metres == before.motion.skeleton->source_unit_metres);
     CHECK(contains(after.notes,
                    "without the static root joint(s) 'static_root' (at one place in every frame)"));
+  }
+  if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
+}
+
+TEST_CASE("import options: a small character in cm is read as cm, not as a giant in inches") {
+  // retarget.yaml's scale 0.6 made a 0.92 m figure of 09_06.bvh's Daz figure, written in cm: 91.6
+  // file units, 0.92 m in cm but 2.33 m in inches, taller than any human. Each real clip, made
+  // 1.0 m and 1.2 m tall (frame 0) and written in cm, is read as cm; made 0.7 m (1.8 to 2.0 m in
+  // inches, a human height too, by the larger of rest pose and frame 0) it is read as inches,
+  // and the note names the cm reading.
+  int seen = 0;
+  for (const auto& f : kg::test::bvh_data_files()) {
+    auto path = kg::test::data_file(f.path);
+    if (!path) continue;
+    INFO(f.path);
+    ++seen;
+    const kg::io::ImportedMotion before = kg::io::import_bvh(*path, {.trim = "none"});
+    const double height = extent_y(world_points(before.motion, 0));
+    for (const double target : {1.0, 1.2, 0.7}) {
+      INFO("made " << target << " m tall");
+      const double shrink = target / height;
+      kg::motion::Skeleton small = *before.motion.skeleton;
+      kg::motion::Motion shrunk = before.motion;
+      for (int j = 0; j < small.joint_count(); ++j) {
+        kg::motion::Joint& joint = small.joint_mut(j);
+        joint.offset *= shrink;
+        for (auto& e : joint.end_sites) e *= shrink;
+        for (std::size_t c = 0; c < joint.channels.size(); ++c)
+          if (!kg::motion::is_rotation(joint.channels[c].kind))
+            shrunk.values.col(joint.first_channel + static_cast<int>(c)) *= shrink;
+      }
+      shrunk.skeleton = std::make_shared<const kg::motion::Skeleton>(std::move(small));
+      const kg::test::TempDir dir;
+      const auto file =
+          dir.write("small.bvh", kg::io::write_bvh_string(shrunk, {.units = "cm", .precision = 9}));
+      const kg::io::ImportedMotion after = kg::io::import_bvh(file, {.trim = "none"});
+      INFO(all(after.notes));
+      if (target > 2.3 / (0.0254 / 0.01)) {
+        CHECK(kg::io::unit_name(after.motion.skeleton->source_unit_metres) == "cm");
+        CHECK(extent_y(world_points(after.motion, 0)) == Approx(target).epsilon(1e-6));
+      } else {
+        CHECK(kg::io::unit_name(after.motion.skeleton->source_unit_metres) == "inch");
+        CHECK(contains(after.notes, "; cm would make it 0."));
+        CHECK(contains(after.notes, " m: set units=cm if it is"));
+      }
+    }
   }
   if (seen == 0) WARN("skipped: no BVH file of ../shared/data found");
 }

@@ -67,8 +67,9 @@ bool known_unit(const std::string& units);
 //     multiplied by the unit's metres; skeleton->source_unit_metres is set to it. `auto` takes
 //     `declared_metres_per_unit` when > 0 (a unit the file states, as ASF's :units), else the
 //     named unit (m, cm, mm, inch, asf) that makes the standing height closest to 1.7 m,
-//     preferring those giving 1.0..2.3 m. Standing height = the larger of the extents along
-//     the up axis of joints and End Sites in the rest pose (OFFSETs only) and in frame 0.
+//     preferring those giving 0.5..2.3 m (a newborn, or a small character, to the tallest
+//     adults; another unit giving such a height is named in the note). Standing height = the larger of the
+//     extents along the up axis of joints and End Sites in the rest pose (OFFSETs only) and in frame 0.
 //   - up: `z` sets file_to_world to the right-handed rotation taking +Z to +Y (-90 deg about
 //     X: (x, y, z) -> (x, z, -y)); `y` keeps the identity. `auto` takes the extents along Y and
 //     Z of joints and End Sites in 9 frames spread evenly over the clip (frame 0 and the last
