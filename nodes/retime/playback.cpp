@@ -19,10 +19,6 @@ std::string shown(double x) {
   return out.str();
 }
 
-}  // namespace
-
-namespace {
-
 int frame_count(double duration, double fps) {
   if (!(fps > 0) || !std::isfinite(fps))
     throw std::invalid_argument("retimed playback: fps " + shown(fps) + " (expected > 0)");
