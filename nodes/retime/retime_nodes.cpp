@@ -379,7 +379,7 @@ class RetimeNode final : public graph::Node {
       w.begin_object();
       w.field("clip", motion.name);
       w.field("objective", to_string(options.target));
-      w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "optimise");
+      w.field("mode", options.mode == RetimeMode::TimeOptimal ? "time_optimal" : "match");
       w.field("flights", to_string(options.flights));
       if (options.flights == FlightTiming::Hold) w.field("flights_found", r.flights);
       w.field("flights_held", r.flights_held);
@@ -423,7 +423,7 @@ class RetimeNode final : public graph::Node {
 NodeType retime_node_type() {
   NodeSpec spec{
       .type = "retime.retime",
-      .version = 3,
+      .version = 4,
       .doc =
           "Physics-based retiming (McCann et al. 2006): the strictly increasing playback p(t), a cubic "
           "spline, "
@@ -483,10 +483,11 @@ NodeType retime_node_type() {
            .choices = {"match", "minimal", "reference"}},
           {.name = "mode",
            .type = ParamType::Enum,
-           .default_value = std::string("optimise"),
-           .doc = "optimise, also called match (eq. 14 for the requested duration and pins) or time_optimal "
+           .default_value = std::string("match"),
+           .doc = "match (eq. 14 for the requested duration and pins; optimise is an older name of it) or "
+                  "time_optimal "
                   "(the shortest feasible playback; duration and pins ignored)",
-           .choices = {"optimise", "match", "time_optimal"}},
+           .choices = {"match", "time_optimal", "optimise"}},
           {.name = "alpha",
            .type = ParamType::Float,
            .default_value = 1000.0,

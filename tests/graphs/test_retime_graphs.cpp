@@ -251,6 +251,7 @@ TEST_CASE("graphs/retime.yaml retimes a captured jump, walk and run to half thei
       // The flight plays at source speed exactly, so it shows the gravity the capture shows (at
       // 1.55x and 1.19x before flights were held: 23.7 and 13.8 m/s²).
       CHECK(rep["flights"].as<std::string>() == "hold");
+      CHECK(rep["mode"].as<std::string>() == "match");
       CHECK(rep["flights_held"].as<int>() >= 1);
       const Flight flight = interior_flight(read_forces(forces));
       REQUIRE(flight.frames > 5);
