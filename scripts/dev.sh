@@ -23,7 +23,7 @@ jobs=${JOBS:-$(nproc)}
 
 build_packages=(g++ cmake ninja-build pkg-config libeigen3-dev libceres-dev libglpk-dev libyaml-cpp-dev
                 libboost-dev libboost-filesystem-dev catch2 libssl-dev nlohmann-json3-dev libcli11-dev
-                libre2-dev)
+                libre2-dev liburdfdom-dev libtinyxml2-dev)
 test_packages=(liborocos-kdl-dev  # KDL: reference inverse dynamics for test_retime and bench_retime
                slurmctld slurmd slurm-client munge  # test_cli's single-node Slurm cluster
                clang-format  # the "format" test: every source as clang-format 14 writes it

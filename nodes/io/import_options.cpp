@@ -52,15 +52,6 @@ std::string fmt(const char* format, double value) {
   return buf;
 }
 
-// Right-handed rotation taking +Z to +Y: -90 degrees about X, (x, y, z) -> (x, z, -y).
-Eigen::Matrix3d z_up_to_y_up() {
-  Eigen::Matrix3d r;
-  r << 1, 0, 0,  //
-      0, 0, 1,   //
-      0, -1, 0;
-  return r;
-}
-
 // Min and max along each file axis of joint origins and End Sites.
 struct Extent {
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -185,6 +176,14 @@ void keep_frames(motion::Motion& m, int first, int last) {
 }
 
 }  // namespace
+
+Eigen::Matrix3d z_up_to_y_up() {
+  Eigen::Matrix3d r;
+  r << 1, 0, 0,  //
+      0, 0, 1,   //
+      0, -1, 0;
+  return r;
+}
 
 FrameRange trim_range(const std::string& trim, int frames) {
   if (trim == "auto" || trim == "none") return {0, frames - 1};

@@ -11,6 +11,8 @@
 #include "kg/base/text.hpp"
 #include "kg/io/asf_amc.hpp"
 #include "kg/io/bvh.hpp"
+#include "kg/io/robot_motion.hpp"
+#include "kg/io/urdf.hpp"
 
 namespace kg::io {
 
@@ -50,6 +52,15 @@ ImportedMotion read_amc_file(const std::string& path, const std::string& skeleto
   ImportedMotion out = import_asf_amc(asf, path, options);
   out.notes.insert(out.notes.begin(), notes.begin(), notes.end());
   return out;
+}
+
+ImportedMotion read_urdf_file(const std::string& path, const std::string& skeleton_path,
+                              const ImportOptions& options) {
+  if (!skeleton_path.empty()) {
+    throw std::invalid_argument(path + ": a URDF file holds its own tree; expected skeleton \"\", got \"" +
+                                skeleton_path + "\"");
+  }
+  return import_urdf(path, options);
 }
 
 }  // namespace
@@ -142,8 +153,51 @@ std::shared_ptr<const MotionFormat> asf_amc_format() {
   });
 }
 
+std::shared_ptr<const MotionFormat> urdf_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "URDF",
+      .extensions = {".urdf"},
+      .skeleton_extension = {},
+      .doc = "a robot's tree (urdfdom): one frame with every joint at zero (urdf.hpp)",
+      .read = &read_urdf_file,
+      .write = {},
+  });
+}
+
+std::shared_ptr<const MotionFormat> robot_csv_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "robot CSV",
+      .extensions = {".csv"},
+      .skeleton_extension = {},
+      .doc = "a robot's motion: time, the floating base (Z up, quaternion x y z w) and each degree of "
+             "freedom, one row per frame (robot_motion.hpp)",
+      .read = {},
+      .write =
+          [](std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
+            options.validate();
+            write_robot_csv(os, robot_trajectory(motion), options.precision);
+          },
+  });
+}
+
+std::shared_ptr<const MotionFormat> robot_json_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "robot JSON",
+      .extensions = {".json"},
+      .skeleton_extension = {},
+      .doc = "a robot's motion as fps, joint_names, root_pos, root_rot and dof_pos arrays (GMR's fields; "
+             "robot_motion.hpp)",
+      .read = {},
+      .write =
+          [](std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
+            options.validate();
+            write_robot_json(os, robot_trajectory(motion));
+          },
+  });
+}
+
 MotionFormats builtin_motion_formats() {
-  return {asf_amc_format(), bvh_format()};
+  return {asf_amc_format(), bvh_format(), urdf_format(), robot_csv_format(), robot_json_format()};
 }
 
 std::shared_ptr<const MotionFormat> motion_reader_for(const std::string& path, const MotionFormats& formats) {

@@ -205,6 +205,11 @@ void clip_file_seeds(const kg::motion::Motion& walk) {
   seed("body", "dempster.yaml", "version: 1\ntable: dempster\n");
 }
 
+// The smallest robot: one link (tests/io/data has one with every joint type).
+void urdf_seeds() {
+  seed("urdf", "single.urdf", "<robot name=\"one\"><link name=\"base\"/></robot>\n");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -226,6 +231,8 @@ int main(int argc, char** argv) {
     seed_files("target", source, "graphs/targets", ".yaml");
     seed_files("constraints", source, "graphs/ladder", ".yaml");
     clip_file_seeds(walk);
+    urdf_seeds();
+    seed_files("urdf", source, "tests/io/data", ".urdf");
   } catch (const std::exception& e) {
     std::cerr << "fuzz_seeds: " << e.what() << '\n';
     return 1;

@@ -41,8 +41,8 @@ const std::string kBvh =
     "  {\n   OFFSET 0 -45 0\n  }\n }\n End Site\n {\n  OFFSET 0 80 0\n }\n}\nMOTION\nFrames: 3\n"
     "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n";
 
-const std::string kBuiltinReaders = ".amc (ASF/AMC, skeleton .asf), .bvh (BVH)";
-const std::string kBuiltinWriters = ".bvh (BVH)";
+const std::string kBuiltinReaders = ".amc (ASF/AMC, skeleton .asf), .bvh (BVH), .urdf (URDF)";
+const std::string kBuiltinWriters = ".bvh (BVH), .csv (robot CSV), .json (robot JSON)";
 
 // A format of the test's own, as a plugin would bring: ".TXT" files (claimed in upper case, so
 // matching ignores case) holding "kg test motion" and the BVH text of the clip.
@@ -207,7 +207,8 @@ TEST_CASE("a format registered like a plugin's plugs into both nodes", "[io][for
   const kg::test::TempDir dir;
   const fs::path in_path = dir.write("small.bvh", kBvh);
   const kg::graph::Registry registry = io_registry(true);
-  CHECK(registry.names<MotionFormat>() == std::vector<std::string>{"ASF/AMC", "BVH", "Test text"});
+  CHECK(registry.names<MotionFormat>() ==
+        std::vector<std::string>{"ASF/AMC", "BVH", "Test text", "URDF", "robot CSV", "robot JSON"});
 
   const auto in = run_node(registry, "io.import_motion",
                            params_for(registry, "io.import_motion", {{"path", in_path.string()}}));
@@ -229,6 +230,7 @@ TEST_CASE("a format registered like a plugin's plugs into both nodes", "[io][for
   CHECK_THROWS_WITH(
       registry.create_node("io.export_motion",
                            params_for(registry, "io.export_motion", {{"path", std::string("x.fbx")}})),
-      "x.fbx: no motion writer claims '.fbx'; writers: .bvh (BVH), .txt (Test text); readers: " +
-          kBuiltinReaders + ", .txt (Test text)");
+      "x.fbx: no motion writer claims '.fbx'; writers: .bvh (BVH), .csv (robot CSV), .json (robot JSON), "
+      ".txt "
+      "(Test text); readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH), .txt (Test text), .urdf (URDF)");
 }

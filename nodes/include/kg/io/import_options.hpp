@@ -56,6 +56,10 @@ struct FrameRange {
 };
 FrameRange trim_range(const std::string& trim, int frames);
 
+// Right-handed rotation taking +Z to +Y: -90 degrees about X, (x, y, z) -> (x, z, -y); the
+// file_to_world of a Z-up file.
+Eigen::Matrix3d z_up_to_y_up();
+
 // Metres per unit for a units name other than auto; throws std::invalid_argument otherwise.
 double metres_per_unit(const std::string& units);
 // Whether metres_per_unit knows `units`.
