@@ -15,6 +15,7 @@
 
 #include "../support/temp_dir.hpp"
 #include "kg/base/error.hpp"
+#include "kg/io/bvh.hpp"
 #include "kg/io/motion_format.hpp"
 #include "kg/io/robot_motion.hpp"
 #include "kg/io/urdf.hpp"
@@ -264,6 +265,31 @@ TEST_CASE("the URDF reader reads the robot as a one-frame clip, Z up, by extensi
   REQUIRE(ankle > 0);
   CHECK(p(0, 3 * ankle + 1) < -0.6);
   CHECK_THROWS_WITH(kg::io::import_motion(kG1.string(), "", {.units = "cm"}), Catch::Contains("in metres"));
+}
+
+TEST_CASE("a G1 motion written as BVH plays in any viewer with the same joint positions") {
+  if (!fs::exists(kG1)) {
+    WARN("skipped: " << kG1.string() << " not found (the robot lives in ../shared/data)");
+    return;
+  }
+  const Robot g1 = read_urdf(kG1.string());
+  kg::motion::Motion m{g1.skeleton, kg::motion::FrameMatrix::Zero(10, g1.skeleton->channel_count()), 50.0,
+                       "g1"};
+  std::mt19937 rng(11);
+  for (int f = 0; f < m.frame_count(); ++f) {
+    for (int k = 0; k < 3; ++k) m.values(f, k) = std::uniform_real_distribution<double>(-1, 1)(rng);
+    for (int k = 3; k < 6; ++k) m.values(f, k) = std::uniform_real_distribution<double>(-3, 3)(rng);
+    for (const kg::io::RobotDof& d : g1.dofs)
+      m.values(f, d.channel) = std::uniform_real_distribution<double>(d.lower, d.upper)(rng);
+  }
+  kg::test::TempDir dir;
+  const fs::path bvh = dir.write("g1.bvh", kg::io::write_bvh_string(m, {.units = "cm", .precision = 9}));
+  const kg::io::ImportedMotion back = kg::io::import_bvh(bvh, {.units = "cm", .up = "z", .trim = "none"});
+  REQUIRE(back.motion.frame_count() == m.frame_count());
+  REQUIRE(back.motion.skeleton->joint_count() == g1.skeleton->joint_count());
+  const Eigen::MatrixXd expected = kg::motion::joint_world_positions(m);
+  const Eigen::MatrixXd got = kg::motion::joint_world_positions(back.motion);
+  CHECK((expected - got).cwiseAbs().maxCoeff() < 1e-6);  // metres
 }
 
 TEST_CASE("a malformed URDF is refused naming its file, the line at fault and what was expected") {
