@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <utility>
 
+#include "kg/base/atomic_file.hpp"
 #include "kg/base/error.hpp"
 #include "kg/base/text.hpp"
 #include "kg/io/asf_amc.hpp"
@@ -61,6 +62,30 @@ ImportedMotion read_urdf_file(const std::string& path, const std::string& skelet
                                 skeleton_path + "\"");
   }
   return import_urdf(path, options);
+}
+
+ImportedMotion read_robot_csv_file(const std::string& path, const std::string& skeleton_path,
+                                   const ImportOptions& options) {
+  options.validate();
+  if (skeleton_path.empty()) {
+    std::error_code ec;
+    if (!std::filesystem::exists(path, ec)) throw kg::Error("no such robot CSV file", {path});
+    throw std::invalid_argument(path + ": a robot CSV needs its robot: set skeleton to the .urdf");
+  }
+  const Robot robot = read_urdf(skeleton_path);
+  ImportedMotion out;
+  out.motion = parse_robot_csv(read_input_file(path, "robot CSV file"), path, robot, options.fps);
+  // Its units and axes are the URDF's; only an explicit frame range applies (auto has no
+  // calibration pose to find on a robot).
+  if (options.trim != "auto" && options.trim != "none") {
+    const FrameRange keep = trim_range(options.trim, out.motion.frame_count());
+    out.motion = motion::frame_range(out.motion, keep.first, keep.last);
+  }
+  out.notes.push_back(file_name_of(path) + ": a robot CSV on " + file_name_of(skeleton_path) + ", " +
+                      std::to_string(out.motion.frame_count()) + " frames at " +
+                      text::significant(out.motion.fps) + " fps" +
+                      (options.fps > 0 ? " (source_fps)" : " (from its time column)") + "; Z up, metres");
+  return out;
 }
 
 }  // namespace
@@ -168,10 +193,10 @@ std::shared_ptr<const MotionFormat> robot_csv_format() {
   return std::make_shared<const MotionFormat>(MotionFormat{
       .name = "robot CSV",
       .extensions = {".csv"},
-      .skeleton_extension = {},
+      .skeleton_extension = ".urdf",
       .doc = "a robot's motion: time, the floating base (Z up, quaternion x y z w) and each degree of "
-             "freedom, one row per frame (robot_motion.hpp)",
-      .read = {},
+             "freedom, one row per frame, on its robot's .urdf (robot_motion.hpp)",
+      .read = &read_robot_csv_file,
       .write =
           [](std::ostream& os, const motion::Motion& motion, const MotionWriteOptions& options) {
             options.validate();

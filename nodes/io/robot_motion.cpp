@@ -1,12 +1,18 @@
 // Robot motions as CSV and JSON (robot_motion.hpp).
 #include "kg/io/robot_motion.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <stdexcept>
+#include <string_view>
+#include <unordered_map>
 
+#include "kg/base/error.hpp"
 #include "kg/base/json.hpp"
 #include "kg/base/text.hpp"
 #include "kg/io/import_options.hpp"
+#include "kg/io/urdf.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/rotations.hpp"
 
@@ -126,6 +132,136 @@ void write_robot_json(std::ostream& os, const RobotTrajectory& t) {
   rows(t.dof_pos);
   w.end_object();
   os << '\n';
+}
+
+namespace {
+
+std::vector<std::string_view> split_commas(std::string_view line) {
+  std::vector<std::string_view> out;
+  std::size_t start = 0;
+  while (true) {
+    const std::size_t comma = line.find(',', start);
+    out.push_back(
+        text::trim(line.substr(start, comma == std::string_view::npos ? line.npos : comma - start)));
+    if (comma == std::string_view::npos) return out;
+    start = comma + 1;
+  }
+}
+
+}  // namespace
+
+motion::Motion parse_robot_csv(const std::string& text, const std::string& path, const Robot& robot,
+                               double fps) {
+  const motion::Skeleton& s = *robot.skeleton;
+  const char* kBase[] = {"time", "root_x", "root_y", "root_z", "root_qx", "root_qy", "root_qz", "root_qw"};
+  std::vector<std::string_view> lines;
+  for (std::size_t start = 0; start < text.size();) {
+    std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) end = text.size();
+    std::string_view line(text.data() + start, end - start);
+    if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
+    lines.push_back(line);
+    start = end + 1;
+  }
+  while (!lines.empty() && text::trim(lines.back()).empty()) lines.pop_back();
+  if (lines.empty()) throw kg::Error("empty robot CSV: expected a header row time,root_x,...", {path, 1});
+  const std::vector<std::string_view> header = split_commas(lines[0]);
+  for (std::size_t k = 0; k < 8; ++k)
+    if (header.size() <= k || header[k] != kBase[k])
+      throw kg::Error("robot CSV header: expected column " + std::to_string(k + 1) + " to be " + kBase[k] +
+                          ", got " + (header.size() <= k ? std::string("nothing") : text::excerpt(header[k])),
+                      {path, 1});
+  // Column -> dof.
+  std::vector<int> dof_of_column(header.size(), -1);
+  std::vector<int> column_of_dof(robot.dofs.size(), -1);
+  for (std::size_t c = 8; c < header.size(); ++c) {
+    const std::string name(header[c]);
+    const int d = robot.find_dof(name);
+    if (d < 0) {
+      std::vector<std::string> names;
+      for (const RobotDof& dof : robot.dofs) names.push_back(dof.name);
+      const std::string near = kg::nearest_name(name, names);
+      throw kg::Error("robot CSV column " + std::to_string(c + 1) + ": " + text::excerpt(name) +
+                          " is no moving joint of " + text::shown_path(robot.path) +
+                          (near.empty() ? std::string() : " (did you mean " + text::excerpt(near) + "?)"),
+                      {path, 1});
+    }
+    if (column_of_dof[static_cast<std::size_t>(d)] >= 0)
+      throw kg::Error("robot CSV column " + std::to_string(c + 1) + ": " + text::excerpt(name) + " twice",
+                      {path, 1});
+    column_of_dof[static_cast<std::size_t>(d)] = static_cast<int>(c);
+    dof_of_column[c] = d;
+  }
+  for (std::size_t d = 0; d < robot.dofs.size(); ++d)
+    if (column_of_dof[d] < 0)
+      throw kg::Error("robot CSV header: no column for joint " + text::excerpt(robot.dofs[d].name) + " of " +
+                          text::shown_path(robot.path),
+                      {path, 1});
+
+  const int frames = static_cast<int>(lines.size()) - 1;
+  if (frames < 1) throw kg::Error("robot CSV: no frame rows after the header", {path, 1});
+  motion::Motion m{robot.skeleton, motion::FrameMatrix::Zero(frames, s.channel_count()), 30.0,
+                   std::filesystem::path(path).stem().string()};
+  std::vector<double> times(static_cast<std::size_t>(frames));
+  Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(s.channel_count());
+  for (int f = 0; f < frames; ++f) {
+    const int line = f + 2;
+    const std::vector<std::string_view> cells = split_commas(lines[static_cast<std::size_t>(f) + 1]);
+    if (cells.size() != header.size())
+      throw kg::Error("robot CSV row: expected " + std::to_string(header.size()) +
+                          " values as the header, got " + std::to_string(cells.size()),
+                      {path, line});
+    std::vector<double> v(cells.size());
+    for (std::size_t c = 0; c < cells.size(); ++c) {
+      const auto x = text::parse_double(cells[c]);
+      if (!x || !std::isfinite(*x))
+        throw kg::Error("robot CSV column " + std::to_string(c + 1) + " (" + text::excerpt(header[c]) +
+                            "): expected a finite number, got " + text::excerpt(cells[c]),
+                        {path, line});
+      v[c] = *x;
+    }
+    times[static_cast<std::size_t>(f)] = v[0];
+    row.setZero();
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (!(q.norm() > 1e-9))
+      throw kg::Error("robot CSV: the base quaternion root_qx..root_qw is zero", {path, line});
+    q.normalize();
+    for (std::size_t c = 8; c < cells.size(); ++c) {
+      const RobotDof& d = robot.dofs[static_cast<std::size_t>(dof_of_column[c])];
+      row[d.channel] = d.offset + d.sign * v[c];
+    }
+    const motion::Joint& root = s.joint(0);
+    const Eigen::Vector3d p(v[1], v[2], v[3]);
+    // The previous frame's angles first, so that the base's Euler angles stay continuous.
+    if (f > 0)
+      row.segment(root.first_channel, static_cast<Eigen::Index>(root.channels.size())) =
+          m.values.row(f - 1).segment(root.first_channel, static_cast<Eigen::Index>(root.channels.size()));
+    for (std::size_t k = 0; k < root.channels.size(); ++k)
+      if (!motion::is_rotation(root.channels[k].kind))
+        row[root.first_channel + static_cast<int>(k)] = p[motion::axis_index(root.channels[k].kind)];
+    motion::set_joint_rotation(s, 0, q.toRotationMatrix(), row);
+    m.values.row(f) = row;
+  }
+  if (fps > 0) {
+    m.fps = fps;
+  } else if (frames >= 2) {
+    const double step = (times.back() - times.front()) / (frames - 1);
+    if (!(step > 0))
+      throw kg::Error("robot CSV: the time column must rise; it goes from " +
+                          text::significant(times.front()) + " to " + text::significant(times.back()),
+                      {path, frames + 1});
+    for (int f = 1; f < frames; ++f) {
+      const double expected = times.front() + f * step;
+      if (std::abs(times[static_cast<std::size_t>(f)] - expected) > 0.01 * step)
+        throw kg::Error("robot CSV: times must be evenly spaced (" + text::significant(step) +
+                            " s apart); this row's is " +
+                            text::significant(times[static_cast<std::size_t>(f)]) + ", expected " +
+                            text::significant(expected) + " (set source_fps to override)",
+                        {path, f + 2});
+    }
+    m.fps = 1.0 / step;
+  }
+  return m;
 }
 
 }  // namespace kg::io

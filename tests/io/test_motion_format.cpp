@@ -41,7 +41,8 @@ const std::string kBvh =
     "  {\n   OFFSET 0 -45 0\n  }\n }\n End Site\n {\n  OFFSET 0 80 0\n }\n}\nMOTION\nFrames: 3\n"
     "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n";
 
-const std::string kBuiltinReaders = ".amc (ASF/AMC, skeleton .asf), .bvh (BVH), .urdf (URDF)";
+const std::string kBuiltinReaders =
+    ".amc (ASF/AMC, skeleton .asf), .bvh (BVH), .csv (robot CSV, skeleton .urdf), .urdf (URDF)";
 const std::string kBuiltinWriters = ".bvh (BVH), .csv (robot CSV), .json (robot JSON)";
 
 // A format of the test's own, as a plugin would bring: ".TXT" files (claimed in upper case, so
@@ -232,5 +233,6 @@ TEST_CASE("a format registered like a plugin's plugs into both nodes", "[io][for
                            params_for(registry, "io.export_motion", {{"path", std::string("x.fbx")}})),
       "x.fbx: no motion writer claims '.fbx'; writers: .bvh (BVH), .csv (robot CSV), .json (robot JSON), "
       ".txt "
-      "(Test text); readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH), .txt (Test text), .urdf (URDF)");
+      "(Test text); readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH), .csv (robot CSV, skeleton .urdf), "
+      ".txt (Test text), .urdf (URDF)");
 }

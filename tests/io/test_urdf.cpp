@@ -292,6 +292,73 @@ TEST_CASE("a G1 motion written as BVH plays in any viewer with the same joint po
   CHECK((expected - got).cwiseAbs().maxCoeff() < 1e-6);  // metres
 }
 
+TEST_CASE(
+    "a robot CSV reads back onto its URDF as the motion written, and bad rows are refused at their line") {
+  if (!fs::exists(kG1)) {
+    WARN("skipped: " << kG1.string() << " not found (the robot lives in ../shared/data)");
+    return;
+  }
+  const Robot g1 = read_urdf(kG1.string());
+  kg::motion::Motion m{g1.skeleton, kg::motion::FrameMatrix::Zero(12, g1.skeleton->channel_count()), 50.0,
+                       "g1"};
+  std::mt19937 rng(5);
+  for (int f = 0; f < m.frame_count(); ++f) {
+    for (int k = 0; k < 3; ++k) m.values(f, k) = std::uniform_real_distribution<double>(-1, 1)(rng);
+    for (int k = 3; k < 6; ++k) m.values(f, k) = 0.3 * f + 0.1 * k;  // turning past pi
+    for (const kg::io::RobotDof& d : g1.dofs)
+      m.values(f, d.channel) = std::uniform_real_distribution<double>(d.lower, d.upper)(rng);
+  }
+  std::ostringstream csv;
+  kg::io::write_robot_csv(csv, kg::io::robot_trajectory(m), 10);
+  kg::test::TempDir dir;
+  const fs::path file = dir.write("walk.csv", csv.str());
+  const kg::io::ImportedMotion back = kg::io::import_motion(file.string(), kG1.string(), {});
+  CHECK(back.motion.fps == Approx(50.0).epsilon(1e-9));
+  REQUIRE(back.motion.frame_count() == m.frame_count());
+  const Eigen::MatrixXd expected = kg::motion::joint_world_positions(m);
+  CHECK((kg::motion::joint_world_positions(back.motion) - expected).cwiseAbs().maxCoeff() < 1e-8);
+  // The written CSV again from what was read: the same text.
+  std::ostringstream again;
+  kg::io::write_robot_csv(again, kg::io::robot_trajectory(back.motion), 10);
+  CHECK(again.str() == csv.str());
+  // A frame range of the file.
+  CHECK(kg::io::import_motion(file.string(), kG1.string(), {.trim = "2..5"}).motion.frame_count() == 4);
+  CHECK_THROWS_WITH(kg::io::import_motion(file.string(), "", {}),
+                    Catch::Contains("set skeleton to the .urdf"));
+
+  const std::string text = csv.str();
+  const std::size_t second_row = text.find('\n', text.find('\n') + 1) + 1;
+  struct Case {
+    const char* what;
+    std::string text;
+    int line;
+    const char* says;
+  };
+  const std::vector<Case> cases{
+      {"an unknown joint", replaced(text, "left_knee_joint", "left_kne_joint"), 1,
+       "did you mean 'left_knee_joint'"},
+      {"a missing base column", replaced(text, "root_qw", "qw"), 1, "to be root_qw"},
+      {"a short row", text.substr(0, text.rfind(',')) + "\n", 13, "values as the header"},
+      {"not a number",
+       replaced(text, text.substr(second_row, text.find(',', second_row) - second_row), "0.02x"), 3,
+       "expected a finite number"},
+      {"uneven times",
+       replaced(text, text.substr(second_row, text.find(',', second_row) - second_row), "0.03"), 3,
+       "evenly spaced"},
+  };
+  for (const Case& c : cases) {
+    INFO(c.what);
+    const fs::path bad = dir.write("bad.csv", c.text);
+    try {
+      kg::io::import_motion(bad.string(), kG1.string(), {});
+      FAIL("accepted");
+    } catch (const kg::Error& e) {
+      CHECK_THAT(e.what(), Catch::Contains(bad.string() + ":" + std::to_string(c.line) + ":") &&
+                               Catch::Contains(c.says));
+    }
+  }
+}
+
 TEST_CASE("a malformed URDF is refused naming its file, the line at fault and what was expected") {
   kg::test::TempDir dir;
   struct Case {
