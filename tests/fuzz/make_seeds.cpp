@@ -207,6 +207,14 @@ void clip_file_seeds(const kg::motion::Motion& walk) {
 
 // The smallest robot: one link (tests/io/data has one with every joint type).
 void urdf_seeds() {
+  // fuzz_robot_csv's robot: hinge, slide, spin.
+  seed("robot_csv", "three_frames.csv",
+       "time,root_x,root_y,root_z,root_qx,root_qy,root_qz,root_qw,hinge,slide,spin\n"
+       "0.0,0,0,0.8,0,0,0,1,0.1,0.05,0\n0.02,0.01,0,0.8,0,0,0.1,0.99,0.2,0.06,3.5\n"
+       "0.04,0.02,0,0.81,0,0.1,0.2,0.97,0.3,0.07,7\n");
+  seed("robot_csv", "columns_reordered.csv",
+       "time,root_x,root_y,root_z,root_qx,root_qy,root_qz,root_qw,spin,hinge,slide\n0,0,0,0,0,0,0,1,1,0.5,0."
+       "1\n");
   seed("urdf", "single.urdf", "<robot name=\"one\"><link name=\"base\"/></robot>\n");
 }
 
