@@ -72,6 +72,12 @@ ImportedMotion read_robot_csv_file(const std::string& path, const std::string& s
     if (!std::filesystem::exists(path, ec)) throw kg::Error("no such robot CSV file", {path});
     throw std::invalid_argument(path + ": a robot CSV needs its robot: set skeleton to the .urdf");
   }
+  if (options.units != "auto" && options.units != "m")
+    throw std::invalid_argument(path + ": a robot CSV is in metres; expected units auto or m, got " +
+                                text::excerpt(options.units));
+  if (options.up != "auto" && options.up != "z")
+    throw std::invalid_argument(path + ": a robot CSV is Z up, as its URDF; expected up auto or z, got " +
+                                text::excerpt(options.up));
   const Robot robot = read_urdf(skeleton_path);
   ImportedMotion out;
   out.motion = parse_robot_csv(read_input_file(path, "robot CSV file"), path, robot, options.fps);

@@ -30,7 +30,8 @@ const kg::io::Robot& robot() {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   const kg::io::Robot& r = robot();
   kg::fuzz::expect_clean("fuzz.csv", [&] {
-    const kg::motion::Motion m = kg::io::parse_robot_csv(std::string(kg::fuzz::text(data, size)), "fuzz.csv", r);
+    const kg::motion::Motion m =
+        kg::io::parse_robot_csv(std::string(kg::fuzz::text(data, size)), "fuzz.csv", r);
     kg::fuzz::require(m.skeleton == r.skeleton, "a motion on another skeleton");
     kg::fuzz::check_motion(m);
     std::ostringstream csv;

@@ -325,6 +325,9 @@ TEST_CASE(
   CHECK(kg::io::import_motion(file.string(), kG1.string(), {.trim = "2..5"}).motion.frame_count() == 4);
   CHECK_THROWS_WITH(kg::io::import_motion(file.string(), "", {}),
                     Catch::Contains("set skeleton to the .urdf"));
+  CHECK_THROWS_WITH(kg::io::import_motion(file.string(), kG1.string(), {.units = "cm"}),
+                    Catch::Contains("in metres"));
+  CHECK_THROWS_WITH(kg::io::import_motion(file.string(), kG1.string(), {.up = "y"}), Catch::Contains("Z up"));
 
   const std::string text = csv.str();
   const std::size_t second_row = text.find('\n', text.find('\n') + 1) + 1;
