@@ -6,6 +6,7 @@
 #include "kg/base/text.hpp"
 #include "kg/body/body_build.hpp"
 #include "kg/body/nodes.hpp"
+#include "kg/body/robot_body.hpp"
 #include "kg/builtin_nodes.hpp"
 #include "kg/motion/motion.hpp"
 
@@ -45,6 +46,7 @@ class BodyModelNode final : public graph::Node {
 
   void run(RunContext& ctx) const override {
     const auto& m = ctx.input<motion::Motion>("motion");
+    if (text::lower_extension(path_) == ".urdf") return run_robot(ctx, m);
     body::BodySpec spec = spec_;
     if (!path_.empty()) {
       const body::LoadedBodySpec file = body::load_body_yaml(path_, spec_);
@@ -106,6 +108,24 @@ class BodyModelNode final : public graph::Node {
   }
 
  private:
+  // The robot's own links and effort limits (robot_body.hpp); table and mass do not apply.
+  void run_robot(RunContext& ctx, const motion::Motion& m) const {
+    const io::Robot robot = io::read_urdf(path_);
+    body::RobotBody built = body::robot_body_model(robot, m.skeleton, spec_.friction, -spec_.gravity.y());
+    for (const std::string& note : built.notes) ctx.log(note);
+    const body::BodyModel& body = built.body;
+    std::int64_t massive = 0;
+    for (const body::SegmentInertia& s : body.segments) massive += s.mass > 0;
+    ctx.report("table", std::string("urdf"));
+    ctx.report("total_mass", body.total_mass());
+    ctx.report("segments_with_mass", massive);
+    ctx.report("channels_unactuated", static_cast<std::int64_t>(m.skeleton->joint(0).channels.size()));
+    ctx.report("channels_limited", static_cast<std::int64_t>(built.channels_limited));
+    ctx.report("friction", body.friction);
+    ctx.report("gravity", body.gravity.norm());
+    ctx.output("body", std::move(built.body));
+  }
+
   body::BodySpec spec_;
   std::string path_;
 };
@@ -113,7 +133,7 @@ class BodyModelNode final : public graph::Node {
 NodeType body_model_type() {
   NodeSpec spec{
       .type = "retime.body_model",
-      .version = 1,
+      .version = 2,
       .doc =
           "The physical character of a clip's skeleton (McCann et al. 2006 §4): every joint's segment mass, "
           "centre of mass and inertia from a published table (Dempster, Zatsiorsky-Seluyanov, de Leva) or "
@@ -145,7 +165,9 @@ NodeType body_model_type() {
            .type = ParamType::InputPath,
            .default_value = std::string(),
            .doc = "optional body YAML: classes, segment overrides, torque_limits (see body_build.hpp); "
-                  "its table/mass/friction/gravity replace the params"},
+                  "its table/mass/friction/gravity replace the params. Or a robot's .urdf: its links' "
+                  "inertials and its joints' effort limits (robot_body.hpp; table, mass and torque_limits "
+                  "do not apply), for a motion on that robot"},
           {.name = "friction",
            .type = ParamType::Float,
            .default_value = 0.5,

@@ -374,6 +374,30 @@ TEST_CASE("the report counts the frames written at the output fps, not at the hu
   }
 }
 
+TEST_CASE("graphs/retime.yaml takes a body file in `body`", "[graphs][retime]") {
+  TempDir dir;
+  const fs::path hop = write_hop(dir);
+  const fs::path body = dir.write("light.yaml", "version: 1\nmass: 55\n");
+  const Result r =
+      run_graph(kRetime, {"input=" + hop.string(), "body=" + body.string(),
+                          "output=" + (dir / "out.bvh").string(), "report=" + (dir / "r.json").string()});
+  INFO(show(r));
+  REQUIRE(r.code == 0);
+  CHECK_THAT(r.err, Catch::Contains("body file " + body.string() + " sets mass = 55 kg"));
+  // A .urdf for a motion that is not on that robot is refused, naming both.
+  const fs::path g1 = fs::path(KG_DATA_DIR) / "robots" / "unitree_g1" / "g1_29dof.urdf";
+  if (!fs::exists(g1)) {
+    WARN("skipped: " << g1.string() << " not found (the robot lives in ../shared/data)");
+    return;
+  }
+  const Result robot = run_graph(
+      kRetime, {"input=" + hop.string(), "body=" + g1.string(), "output=" + (dir / "robot.bvh").string()});
+  INFO(show(robot));
+  CHECK(robot.code != 0);
+  CHECK_THAT(robot.err, Catch::Contains("not its tree"));
+  CHECK_FALSE(fs::exists(dir / "robot.bvh"));
+}
+
 TEST_CASE("a clip that outlasts its 30 Hz working copy is played to its last frame", "[graphs][retime]") {
   // 2 frames at 120 Hz past the copy's last frame (1/60 s): the warp ends there, and its end speed
   // plays the rest (before, 13_13.bvh retimed at duration_scale 1 lost 2 of its 435 frames).
