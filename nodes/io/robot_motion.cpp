@@ -1,6 +1,7 @@
 // Robot motions as CSV and JSON (robot_motion.hpp).
 #include "kg/io/robot_motion.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -148,6 +149,21 @@ std::vector<std::string_view> split_commas(std::string_view line) {
   }
 }
 
+// The rate of `steps` frame steps spanning `span` seconds, the times printed with `decimals`
+// digits after the point. As for a BVH header's frame time (motion::rate_of_printed_frame_time),
+// printed times put span/steps a little off the capture's rate (30.0001 for a 5-frame clip at 6
+// digits), and resampled to its own rate such a clip would lose its last frame: when an integer
+// rate n or an NTSC rate n * 1000/1001 gives a span within the printing's error (a unit of the
+// last digit, half at each end) and that error fixes the rate to 1e-4 of itself, that rate.
+double rate_of_printed_times(double span, int steps, int decimals) {
+  const double raw = steps / span;
+  const double error = std::pow(10.0, -decimals);
+  if (error / span > 1e-4) return raw;  // too few digits for the times to fix the rate
+  for (const double rate : {std::round(raw), std::round(raw * 1.001) * 1000.0 / 1001.0})
+    if (rate > 0 && std::abs(span - steps / rate) <= error) return rate;
+  return raw;
+}
+
 }  // namespace
 
 motion::Motion parse_robot_csv(const std::string& text, const std::string& path, const Robot& robot,
@@ -203,6 +219,7 @@ motion::Motion parse_robot_csv(const std::string& text, const std::string& path,
   motion::Motion m{robot.skeleton, motion::FrameMatrix::Zero(frames, s.channel_count()), 30.0,
                    std::filesystem::path(path).stem().string()};
   std::vector<double> times(static_cast<std::size_t>(frames));
+  int time_decimals = 0;
   Eigen::RowVectorXd row = Eigen::RowVectorXd::Zero(s.channel_count());
   for (int f = 0; f < frames; ++f) {
     const int line = f + 2;
@@ -221,6 +238,8 @@ motion::Motion parse_robot_csv(const std::string& text, const std::string& path,
       v[c] = *x;
     }
     times[static_cast<std::size_t>(f)] = v[0];
+    if (const std::size_t dot = cells[0].find('.'); dot != std::string_view::npos)
+      time_decimals = std::max(time_decimals, static_cast<int>(cells[0].size() - dot - 1));
     row.setZero();
     Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
     if (!(q.norm() > 1e-9))
@@ -259,7 +278,7 @@ motion::Motion parse_robot_csv(const std::string& text, const std::string& path,
                             text::significant(expected) + " (set source_fps to override)",
                         {path, f + 2});
     }
-    m.fps = 1.0 / step;
+    m.fps = rate_of_printed_times(times.back() - times.front(), frames - 1, time_decimals);
   }
   return m;
 }

@@ -289,6 +289,26 @@ TEST_CASE(
   std::ostringstream again;
   kg::io::write_robot_csv(again, kg::io::robot_trajectory(back.motion), 10);
   CHECK(again.str() == csv.str());
+  // Times printed to 6 digits stand for 30 fps exactly, not 30.0001 (resampled to its own rate
+  // the clip keeps every frame); an uneven rate stays as the times give it.
+  {
+    kg::motion::Motion short_clip = kg::motion::frame_range(m, 0, 4);
+    short_clip.fps = 30;
+    std::ostringstream six;
+    kg::io::write_robot_csv(six, kg::io::robot_trajectory(short_clip), 6);
+    const fs::path at30 = dir.write("at30.csv", six.str());
+    CHECK(kg::io::import_motion(at30.string(), kG1.string(), {}).motion.fps == 30.0);
+    short_clip.fps = 29.97002997;
+    std::ostringstream ntsc;
+    kg::io::write_robot_csv(ntsc, kg::io::robot_trajectory(short_clip), 6);
+    const fs::path at_ntsc = dir.write("ntsc.csv", ntsc.str());
+    CHECK(kg::io::import_motion(at_ntsc.string(), kG1.string(), {}).motion.fps == 30000.0 / 1001.0);
+    short_clip.fps = 31.4;
+    std::ostringstream odd;
+    kg::io::write_robot_csv(odd, kg::io::robot_trajectory(short_clip), 6);
+    const fs::path at_odd = dir.write("odd.csv", odd.str());
+    CHECK(kg::io::import_motion(at_odd.string(), kG1.string(), {}).motion.fps == Approx(31.4).epsilon(1e-5));
+  }
   // A frame range of the file.
   CHECK(kg::io::import_motion(file.string(), kG1.string(), {.trim = "2..5"}).motion.frame_count() == 4);
   CHECK_THROWS_WITH(kg::io::import_motion(file.string(), "", {}),

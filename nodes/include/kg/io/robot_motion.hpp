@@ -43,9 +43,11 @@ void write_robot_csv(std::ostream& os, const RobotTrajectory& trajectory, int pr
 void write_robot_json(std::ostream& os, const RobotTrajectory& trajectory);
 
 // Reads write_robot_csv's text back onto `robot`'s skeleton (read_urdf, urdf.hpp): columns by
-// name in any order after time (every degree of freedom of the robot once; no other column),
-// the base quaternion normalised, the frame rate from the time column (which must rise by one
-// constant step, within a hundredth of it) unless `fps` > 0 overrides it. `path` names the file
+// name in any order after the eight base columns (every degree of freedom of the robot once; no
+// other column), the base quaternion normalised, the frame rate from the time column (which must
+// rise by one constant step, within a hundredth of it; an integer or NTSC rate when the printed
+// times fix it to 1e-4, so 30, not 30.0001) unless `fps` > 0 overrides it; the first row is
+// frame 0, whatever its time. `path` names the file
 // in messages. Throws kg::Error at file:line for a missing or unknown column (with the nearest
 // joint name), a row of the wrong length, a value that is not a finite number, a zero
 // quaternion, or times that are not evenly spaced.
