@@ -63,9 +63,12 @@ FileIndex index_file(const std::string& path, const std::string& text) {
   FileIndex index;
   if (const char* name = robot->Attribute("name")) index.robot_name = name;
   for (const tinyxml2::XMLElement* e = robot->FirstChildElement(); e; e = e->NextSiblingElement()) {
-    const char* name = e->Attribute("name");
-    if (!name) continue;  // urdfdom refuses it with its own message
     const std::string tag = e->Name();
+    const char* name = e->Attribute("name");
+    if ((tag == "joint" || tag == "link") && (!name || !*name))
+      throw kg::Error("<" + tag + "> without a name: expected a name=\"...\" attribute",
+                      {path, e->GetLineNum()});
+    if (!name) continue;
     if (tag == "joint") {
       if (index.joint_line.emplace(name, e->GetLineNum()).second) index.joints_in_order.push_back(name);
     } else if (tag == "link") {

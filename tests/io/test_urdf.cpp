@@ -376,6 +376,8 @@ TEST_CASE("a malformed URDF is refused naming its file, the line at fault and wh
        "lower <= upper"},
       {"a skew prismatic joint", replaced(kToy, "rpy=\"0 0 3.141592653589793\"", "rpy=\"0 0 0.5\""), 22,
        "not an axis of the base frame"},
+      {"a link without a name (a fuzz finding)", replaced(kToy, "<link name=\"upper\"/>", "<link/>"), 0,
+       "<link> without a name"},
       {"a negative mass", replaced(kToy, "<mass value=\"2\"/>", "<mass value=\"-2\"/>"), 8, "mass"},
   };
   for (const Case& c : cases) {
