@@ -162,7 +162,7 @@ std::string Skeleton::channel_name(int channel) const {
 
 double Skeleton::rest_height() const {
   if (joints_.empty()) return 0.0;
-  std::vector<Eigen::Vector3d> origin(joints_.size());  // file coordinates, rest pose
+  const std::vector<Eigen::Vector3d> origin = rest_origins();
   double lo = std::numeric_limits<double>::infinity(), hi = -lo;
   auto extend = [&](const Eigen::Vector3d& p_file) {
     const double y = file_to_world.row(1).dot(p_file);
@@ -170,13 +170,20 @@ double Skeleton::rest_height() const {
     hi = std::max(hi, y);
   };
   for (std::size_t j = 0; j < joints_.size(); ++j) {
+    extend(origin[j]);
+    for (const Eigen::Vector3d& e : joints_[j].end_sites) extend(origin[j] + e);
+  }
+  return hi - lo;
+}
+
+std::vector<Eigen::Vector3d> Skeleton::rest_origins() const {
+  std::vector<Eigen::Vector3d> origin(joints_.size());
+  for (std::size_t j = 0; j < joints_.size(); ++j) {
     const Joint& jt = joints_[j];
     origin[j] =
         (jt.parent >= 0 ? origin[static_cast<std::size_t>(jt.parent)] : Eigen::Vector3d::Zero()) + jt.offset;
-    extend(origin[j]);
-    for (const Eigen::Vector3d& e : jt.end_sites) extend(origin[j] + e);
   }
-  return hi - lo;
+  return origin;
 }
 
 std::string nearest_joint_name(const Skeleton& sk, const std::string& name) {

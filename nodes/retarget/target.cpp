@@ -30,17 +30,6 @@ void check_factors(const Skeleton& source, const Eigen::VectorXd& factors, const
     }
 }
 
-// Rest-pose positions (file coordinates) of every joint origin.
-std::vector<Eigen::Vector3d> rest_origins(const Skeleton& s) {
-  std::vector<Eigen::Vector3d> origin(static_cast<std::size_t>(s.joint_count()));
-  for (int j = 0; j < s.joint_count(); ++j) {
-    const Joint& jt = s.joint(j);
-    origin[static_cast<std::size_t>(j)] =
-        (jt.parent >= 0 ? origin[static_cast<std::size_t>(jt.parent)] : Eigen::Vector3d::Zero()) + jt.offset;
-  }
-  return origin;
-}
-
 // The lowest rest-pose point: its joint, and the End Site index on it (-1: the joint origin).
 struct LowPoint {
   int joint = -1;
@@ -48,7 +37,7 @@ struct LowPoint {
 };
 
 LowPoint lowest_point(const Skeleton& s) {
-  const std::vector<Eigen::Vector3d> origin = rest_origins(s);
+  const std::vector<Eigen::Vector3d> origin = s.rest_origins();
   LowPoint low;
   double lowest = std::numeric_limits<double>::infinity();
   for (int j = 0; j < s.joint_count(); ++j) {
@@ -71,7 +60,7 @@ int root_of(const Skeleton& s, int joint) {
 
 // Height of the root of `p.joint` above point p in s's rest pose (world Y).
 double height_above(const Skeleton& s, const LowPoint& p) {
-  const std::vector<Eigen::Vector3d> origin = rest_origins(s);
+  const std::vector<Eigen::Vector3d> origin = s.rest_origins();
   const int root = root_of(s, p.joint);
   Eigen::Vector3d point = origin[static_cast<std::size_t>(p.joint)];
   if (p.end_site >= 0) point += s.joint(p.joint).end_sites[static_cast<std::size_t>(p.end_site)];

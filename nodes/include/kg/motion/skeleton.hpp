@@ -87,6 +87,10 @@ class Skeleton {
   // Metres per unit of the file it came from (0.01 for cm); exporters write back in that unit.
   double source_unit_metres = 1.0;
 
+  // Every joint's origin in the rest pose (every rotation channel zero, the root at the origin),
+  // file coordinates (apply file_to_world for world), metres; one per joint.
+  std::vector<Eigen::Vector3d> rest_origins() const;
+
   // Standing height estimate: vertical extent (world Y) of joints and end sites in the rest
   // pose, metres.
   double rest_height() const;
