@@ -8,7 +8,7 @@ std::vector<graph::NodeType> builtin_node_types() {
   std::vector<graph::NodeType> all;
   for (auto area :
        {motion_node_types, bvh_node_types, asf_amc_node_types, report_node_types, inspect_node_types,
-        synth_node_types, retarget_target_node_types, retarget_constraint_node_types,
+        synth_node_types, retarget_target_node_types, retarget_map_node_types, retarget_constraint_node_types,
         retarget_spacetime_node_types, retarget_metrics_node_types, retime_body_node_types, retime_node_types,
         retime_contact_node_types})
     for (graph::NodeType& type : area()) all.push_back(std::move(type));

@@ -133,6 +133,70 @@ int inspect(Host& host, const Options& o) {
   return kExitOk;
 }
 
+constexpr const char* kMapGraph = R"(version: 1
+doc: kinegraph map SOURCE TARGET
+variables:
+  source: {required: true}
+  source_skeleton: {default: ""}
+  target: {required: true}
+  target_skeleton: {default: ""}
+  out: {default: ""}
+nodes:
+  source:
+    type: io.import_motion
+    params: {path: "${source}", skeleton: "${source_skeleton}", trim: "none"}
+  target:
+    type: io.import_motion
+    params: {path: "${target}", skeleton: "${target_skeleton}", trim: "none"}
+  map:
+    type: retarget.propose_map
+    params: {source_file: "${source}", target_file: "${target}"}
+  write:
+    type: retarget.write_map
+    params: {path: "${out}"}
+connections:
+  - {from: source.motion, to: map.source}
+  - {from: target.motion, to: map.target}
+  - {from: map.map, to: write.map}
+)";
+
+// Prints what was matched, what was not and how each chain was found; writes --out.
+int map(Host& host, const Options& o) {
+  const std::map<std::string, std::string> sets = {{"source", o.clip.string()},
+                                                   {"source_skeleton", o.skeleton.string()},
+                                                   {"target", o.map_target.string()},
+                                                   {"target_skeleton", o.target_skeleton.string()},
+                                                   {"out", o.out.string()}};
+  graph::Graph g;
+  try {
+    g = graph::load_graph_from_string(kMapGraph, "kinegraph map", host.registry, sets);
+  } catch (const std::exception& e) {
+    throw Failure{kExitGraphInvalid, e.what()};
+  }
+  std::vector<std::string> read, how;
+  graph::RunOptions options;
+  options.on_log = [&](const std::string& node, const std::string& message) {
+    if (message.rfind("failed: ", 0) == 0 || node == "write") return;
+    (node == "map" ? how : read).push_back(message);
+  };
+  const graph::RunResult result = graph::run_graph(g, host.registry, options);
+  for (const std::string& note : read) std::cout << "read: " << note << '\n';
+  if (!result.ok) {
+    for (const graph::NodeRun& n : result.nodes)
+      if (n.status == graph::NodeStatus::Failed) std::cerr << "kinegraph: map: " << n.message << '\n';
+    return kExitNodeFailed;
+  }
+  for (const std::string& line : how) std::cout << "found: " << line << '\n';
+  const Report& report = result.outputs.at("map.report").get<Report>();
+  for (const std::string& line : report.strings("summary")) std::cout << line << '\n';
+  if (o.out.empty()) {
+    std::cout << "(not written: give --out MAP.yaml to write the map)\n";
+  } else {
+    std::cout << "wrote " << o.out.string() << '\n';
+  }
+  return kExitOk;
+}
+
 // Every problem, one line each; a graph without problems is valid even when a run needs values.
 int validate(Host& host, const Options& o) {
   const graph::GraphCheck check = check_graph(host, o.graph, o.sets);
@@ -181,6 +245,8 @@ int dispatch(const Options& o, const char* argv0) {
       return validate(host, o);
     case Verb::Inspect:
       return inspect(host, o);
+    case Verb::Map:
+      return map(host, o);
     case Verb::Dot: {
       const graph::Graph g = load_graph(host, o.graph, o.sets);
       write_dot(std::cout, g, host.registry);
@@ -209,9 +275,10 @@ int main(int argc, char** argv) {
   try {
     options = parse_options(argc, argv);
   } catch (const UsageError& e) {
-    std::cerr << "kinegraph: " << e.what() << "\n"
-              << "usage: kinegraph run|validate|dot|batch GRAPH [options], kinegraph nodes [--json], "
-                 "kinegraph merge DIR, kinegraph inspect CLIP; see kinegraph --help\n";
+    std::cerr
+        << "kinegraph: " << e.what() << "\n"
+        << "usage: kinegraph run|validate|dot|batch GRAPH [options], kinegraph nodes [--json], "
+           "kinegraph merge DIR, kinegraph inspect CLIP, kinegraph map SOURCE TARGET; see kinegraph --help\n";
     return kExitUsage;
   }
   try {

@@ -29,7 +29,10 @@ constexpr VerbName kVerbs[] = {
     {"merge", Verb::Merge, "merge the shard manifests in DIR into DIR/manifest.jsonl"},
     {"inspect", Verb::Inspect,
      "the motion doctor: CLIP's joints, rate, up axis, units, calibration frames, footplants, flights and "
-     "their gravity, floor penetration, pops, and the --set values that fix what it found"}};
+     "their gravity, floor penetration, pops, and the --set values that fix what it found"},
+    {"map", Verb::Map,
+     "propose a skeleton map from SOURCE's skeleton to TARGET's (each a clip, an .asf or a URDF): the chains "
+     "found on each with their evidence, what matched and what did not; --out writes the map to edit"}};
 
 const char* verb_name(Verb verb) {
   for (const VerbName& v : kVerbs) {
@@ -42,6 +45,7 @@ const char* verb_name(Verb verb) {
 const char* operand_of(Verb verb) {
   if (verb == Verb::Run || verb == Verb::Validate || verb == Verb::Dot || verb == Verb::Batch) return "GRAPH";
   if (verb == Verb::Inspect) return "CLIP";
+  if (verb == Verb::Map) return "SOURCE";
   return verb == Verb::Merge ? "DIR" : nullptr;
 }
 
@@ -151,19 +155,25 @@ constexpr OptionSpec kOptions[] = {
      "files written come out byte for byte the same on every run and machine (no wall-clock times)",
      in(Verb::Run), [](O& o, S) { o.reproducible = true; }},
     {"--plugin-dir", "", "DIR", "load every plugin (*.so) directly in DIR; may be repeated",
-     kGraphVerbs | in(Verb::Nodes) | in(Verb::Inspect), apply_plugin_dir},
+     kGraphVerbs | in(Verb::Nodes) | in(Verb::Inspect) | in(Verb::Map), apply_plugin_dir},
     {"--json", "", "", "print JSON instead of text", in(Verb::Nodes) | in(Verb::Inspect),
      [](O& o, S) { o.json = true; }},
-    {"--skeleton", "", "ASF", "inspect: the .asf of an .amc clip (default: <subject>.asf beside it)",
-     in(Verb::Inspect), [](O& o, S v) { set_path_once(o.skeleton, "--skeleton", v, "an .asf file"); }},
+    {"--skeleton", "", "ASF",
+     "inspect, map: the .asf of an .amc CLIP or SOURCE (default: <subject>.asf beside it)",
+     in(Verb::Inspect) | in(Verb::Map),
+     [](O& o, S v) { set_path_once(o.skeleton, "--skeleton", v, "an .asf file"); }},
+    {"--target-skeleton", "", "ASF", "map: the .asf of an .amc TARGET (default: <subject>.asf beside it)",
+     in(Verb::Map),
+     [](O& o, S v) { set_path_once(o.target_skeleton, "--target-skeleton", v, "an .asf file"); }},
     {"--inputs", "", "PATTERN...",
      "input files, as paths or patterns: * ? [..] within a folder name, ** for any depth of folders "
      "(quoted); every argument up to the next option is a pattern",
      in(Verb::Batch), [](O& o, S v) { o.inputs.push_back(v); }, true},
     {"--input-list", "", "FILE", "input files listed in FILE, one per line (with or without --inputs)",
      in(Verb::Batch), [](O& o, S v) { set_path_once(o.input_list, "--input-list", v, "a file name"); }},
-    {"--out", "", "DIR", "the folder of item outputs, logs and the manifest", in(Verb::Batch),
-     [](O& o, S v) { set_path_once(o.out, "--out", v, "a folder"); }},
+    {"--out", "", "PATH",
+     "batch: the folder of item outputs, logs and the manifest; map: the map file to write (YAML)",
+     in(Verb::Batch) | in(Verb::Map), [](O& o, S v) { set_path_once(o.out, "--out", v, "a folder"); }},
     {"--force", "", "", "redo items already done", in(Verb::Batch), [](O& o, S) { o.force = true; }},
     {"--shard", "", "I/N", "run only items I, I+N, I+2N, ... of the sorted inputs (0 <= I < N)",
      in(Verb::Batch), apply_shard},
@@ -219,6 +229,8 @@ struct CommandLine {
     CLI::App* app;
     std::string operand;  // its GRAPH or DIR
     CLI::Option* operand_option = nullptr;
+    std::string second_operand;  // map's TARGET
+    CLI::Option* second_operand_option = nullptr;
     std::vector<std::string> extra;     // arguments beyond it
     std::vector<CLI::Option*> options;  // per kOptions: nullptr when it does not apply
   };
@@ -248,9 +260,13 @@ struct CommandLine {
       v.operand_option = sub->add_option(operand, v.operand,
                                          verb == Verb::Merge     ? "the batch's folder"
                                          : verb == Verb::Inspect ? "the clip (.bvh or .amc)"
+                                         : verb == Verb::Map     ? "the source: a clip, an .asf or a URDF"
                                                                  : "the graph file (YAML)")
                              ->type_name("");
     }
+    if (verb == Verb::Map)
+      v.second_operand_option =
+          sub->add_option("TARGET", v.second_operand, "the target: a clip, an .asf or a URDF")->type_name("");
     sub->add_option("extra", v.extra)->group("");
     sub->add_flag("-h,--help")->group("");
     for (const OptionSpec& spec : kOptions)
@@ -456,7 +472,13 @@ void take_operand(const CommandLine::Verbs& v, Options& o) {
                            : std::string(verb_name(v.verb)) + " needs a " + operand + " file" +
                                  (v.verb == Verb::Inspect ? " (.bvh, or .amc)" : ""));
     }
-    (v.verb == Verb::Merge ? o.out : v.verb == Verb::Inspect ? o.clip : o.graph) = v.operand;
+    (v.verb == Verb::Merge                            ? o.out
+     : v.verb == Verb::Inspect || v.verb == Verb::Map ? o.clip
+                                                      : o.graph) = v.operand;
+  }
+  if (v.verb == Verb::Map) {
+    if (v.second_operand_option->count() == 0) throw UsageError("map needs a SOURCE and a TARGET file");
+    o.map_target = v.second_operand;
   }
   if (!v.extra.empty()) throw UsageError("unexpected argument '" + v.extra.front() + "'");
 }

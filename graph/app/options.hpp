@@ -23,7 +23,7 @@ enum ExitCode : int {
   kExitInterrupted = 130,  // batch: stopped by SIGINT or SIGTERM; running it again continues
 };
 
-enum class Verb { Help, Version, Run, Validate, Nodes, Dot, Batch, Merge, Inspect };
+enum class Verb { Help, Version, Run, Validate, Nodes, Dot, Batch, Merge, Inspect, Map };
 
 // --shard I/N: items whose position in the sorted input list is I modulo N (0 <= I < N).
 struct Shard {
@@ -41,14 +41,16 @@ struct Options {
   std::filesystem::path report;                    // --report FILE (run); empty: none
   std::vector<std::filesystem::path> plugin_dirs;  // --plugin-dir DIR, in order
   bool json = false;                               // --json (nodes, inspect)
-  std::filesystem::path clip;                      // inspect's CLIP
-  std::filesystem::path skeleton;                  // --skeleton ASF (inspect)
+  std::filesystem::path clip;                      // inspect's CLIP, map's SOURCE
+  std::filesystem::path skeleton;                  // --skeleton ASF (inspect, map)
+  std::filesystem::path map_target;                // map's TARGET
+  std::filesystem::path target_skeleton;           // --target-skeleton ASF (map)
   bool reproducible = false;                       // --reproducible (run; batch always is)
 
   // batch
   std::vector<std::string> inputs;          // --inputs PATTERN... (file_patterns.hpp)
   std::filesystem::path input_list;         // --input-list FILE: one input path per line
-  std::filesystem::path out;                // --out DIR (batch); the DIR argument of merge
+  std::filesystem::path out;                // --out DIR (batch), FILE (map); the DIR argument of merge
   bool force = false;                       // --force: redo items already done
   std::optional<Shard> shard;               // --shard I/N
   std::filesystem::path slurm;              // --slurm SCRIPT: write sbatch scripts instead of running

@@ -55,6 +55,24 @@ ImportedMotion read_amc_file(const std::string& path, const std::string& skeleto
   return out;
 }
 
+// An ASF alone: its rest pose as one frame (every channel zero), at the AMC default rate.
+ImportedMotion read_asf_file(const std::string& path, const std::string& skeleton_path,
+                             const ImportOptions& options) {
+  if (!skeleton_path.empty()) {
+    throw std::invalid_argument(
+        path + ": an ASF file is the skeleton itself; expected skeleton \"\", got \"" + skeleton_path + "\"");
+  }
+  options.validate();
+  const AsfSkeleton asf = read_asf(path);
+  ImportedMotion out;
+  out.motion = motion::Motion{asf.skeleton, motion::FrameMatrix::Zero(1, asf.skeleton->channel_count()),
+                              kAmcDefaultFps, std::filesystem::path(path).stem().string()};
+  out.notes = apply_import_options(out.motion, options, kAmcDefaultFps, path,
+                                   asf.declared_metres_per_unit().value_or(0.0));
+  out.notes.push_back(file_name_of(path) + ": an ASF skeleton alone: one frame, its rest pose");
+  return out;
+}
+
 ImportedMotion read_urdf_file(const std::string& path, const std::string& skeleton_path,
                               const ImportOptions& options) {
   if (!skeleton_path.empty()) {
@@ -184,6 +202,17 @@ std::shared_ptr<const MotionFormat> asf_amc_format() {
   });
 }
 
+std::shared_ptr<const MotionFormat> asf_format() {
+  return std::make_shared<const MotionFormat>(MotionFormat{
+      .name = "ASF skeleton",
+      .extensions = {".asf"},
+      .skeleton_extension = {},
+      .doc = "an Acclaim skeleton (.asf) alone: one frame, its rest pose (asf_amc.hpp)",
+      .read = &read_asf_file,
+      .write = {},
+  });
+}
+
 std::shared_ptr<const MotionFormat> urdf_format() {
   return std::make_shared<const MotionFormat>(MotionFormat{
       .name = "URDF",
@@ -228,7 +257,8 @@ std::shared_ptr<const MotionFormat> robot_json_format() {
 }
 
 MotionFormats builtin_motion_formats() {
-  return {asf_amc_format(), bvh_format(), urdf_format(), robot_csv_format(), robot_json_format()};
+  return {asf_amc_format(), asf_format(),       bvh_format(),
+          urdf_format(),    robot_csv_format(), robot_json_format()};
 }
 
 std::shared_ptr<const MotionFormat> motion_reader_for(const std::string& path, const MotionFormats& formats) {

@@ -11,9 +11,8 @@
 #include "kg/base/error.hpp"
 #include "kg/base/text.hpp"
 #include "kg/base/yaml_reader.hpp"
-#include "kg/io/asf_amc.hpp"
-#include "kg/io/bvh.hpp"
 #include "kg/io/import_options.hpp"
+#include "kg/io/motion_format.hpp"
 #include "kg/retarget/target.hpp"
 
 namespace kg::retarget {
@@ -170,19 +169,10 @@ LoadedTarget load_target(std::shared_ptr<const Skeleton> source, const std::stri
   LoadedTarget out;
   out.kind = "skeleton";
   const std::string what = "target skeleton " + path;
-  if (ext == ".bvh") {
-    io::ImportedMotion in = io::import_bvh(path, io::ImportOptions{});
+  if (ext == ".bvh" || ext == ".asf") {
+    io::ImportedMotion in = io::import_motion(path, "", io::ImportOptions{});
     out.notes = in.notes;
     out.target = skeleton_target(std::move(source), *in.motion.skeleton, what, &out.notes);
-    return out;
-  }
-  if (ext == ".asf") {
-    const io::AsfSkeleton asf = io::read_asf(path);
-    motion::Motion rest{asf.skeleton, motion::FrameMatrix(0, asf.skeleton->channel_count()),
-                        io::kAmcDefaultFps, "rest"};
-    out.notes = io::apply_import_options(rest, io::ImportOptions{}, io::kAmcDefaultFps, path,
-                                         asf.declared_metres_per_unit().value_or(0.0));
-    out.target = skeleton_target(std::move(source), *rest.skeleton, what, &out.notes);
     return out;
   }
   throw std::invalid_argument(

@@ -711,3 +711,56 @@ TEST_CASE("inspect: --set trim reads only those frames", "[cli]") {
   CHECK(YAML::Load(cut.out)["calibration_frames"].size() == 0);
   CHECK(YAML::Load(cut.out)["frames"].as<int>() == YAML::Load(all.out)["frames"].as<int>() - 5);
 }
+
+TEST_CASE("map: chains of a clip and a robot, matched and written, bad operands refused", "[cli]") {
+  const fs::path clip = fs::path(KG_DATA_DIR) / "cmu/asf_amc/07_05.amc";
+  const fs::path robot = fs::path(KG_DATA_DIR) / "robots/unitree_g1/g1_29dof.urdf";
+  if (!fs::exists(clip) || !fs::exists(robot)) {
+    WARN("skipped: " << clip << " or " << robot << " not found");
+    return;
+  }
+  const TempDir dir;
+  SECTION("07_05.amc onto the G1: every chain matched, the file names the robot's joints") {
+    const fs::path out = dir.path() / "walk_to_g1.yaml";
+    const Result r = kinegraph({"map", clip.string(), robot.string(), "--out", out.string()});
+    INFO(show(r));
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.out,
+               Contains("read: 07_05.amc: skeleton not given") &&
+                   Contains("found: target: legs: left is left_hip_pitch_joint (by name)") &&
+                   Contains("matched left_leg: lfemur, ltibia, lfoot, ltoes -> left_hip_pitch_joint") &&
+                   Contains("24 feature pairs from 7 chains") && Contains("wrote " + out.string()));
+    CHECK_THAT(r.out, !Contains("not matched"));
+    const YAML::Node map = YAML::LoadFile(out.string());
+    CHECK(map["version"].as<int>() == 1);
+    CHECK(map["source"]["chains"]["pelvis"].as<std::string>() == "root");
+    CHECK(map["target"]["chains"]["right_arm"]["wrist"].as<std::string>() == "right_wrist_roll_joint");
+    CHECK(map["target"]["chains"]["spine"].size() == 3);
+  }
+  SECTION("without --out nothing is written; an .asf alone is a source") {
+    const Result r = kinegraph({"map", (clip.parent_path() / "07.asf").string(), robot.string()});
+    INFO(show(r));
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.out, Contains("an ASF skeleton alone") && Contains("(not written: give --out MAP.yaml"));
+  }
+  SECTION("a target without limbs: nothing matched, said, and a warning") {
+    const Result r = kinegraph(
+        {"map", clip.string(), (fs::path(KG_SOURCE_DIR) / "tests/graphs/data/two_joints.bvh").string()});
+    INFO(show(r));
+    REQUIRE(r.code == 0);
+    CHECK_THAT(r.out, Contains("not matched: left_leg: only the source has it") &&
+                          Contains("not matched: target: no pair of mirrored limbs") &&
+                          Contains("0 feature pairs") && Contains("warning: no chain is on both skeletons"));
+  }
+  SECTION("usage and input errors") {
+    CHECK(kinegraph({"map", clip.string()}).code == 2);
+    const Result missing = kinegraph({"map", clip.string(), "/nonexistent/robot.urdf"});
+    CHECK(missing.code == 1);
+    CHECK_THAT(missing.err, Contains("/nonexistent/robot.urdf"));
+    const Result not_yaml =
+        kinegraph({"map", clip.string(), robot.string(), "--out", (dir.path() / "m.bvh").string()});
+    CHECK(not_yaml.code == 3);
+    CHECK_THAT(not_yaml.err, Contains("m.bvh: a skeleton map is written as YAML"));
+    CHECK_FALSE(fs::exists(dir.path() / "m.bvh"));
+  }
+}

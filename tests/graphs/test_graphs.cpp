@@ -518,7 +518,8 @@ TEST_CASE("graphs/convert.yaml refuses at load an extension no motion format cla
   TempDir work;
   fs::copy_file(kSource / "tests/graphs/data/two_joints.bvh", work / "clip.bvh");
   const std::string readers =
-                        "readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH), .csv (robot CSV, skeleton "
+                        "readers: .amc (ASF/AMC, skeleton .asf), .asf (ASF skeleton), .bvh (BVH), .csv "
+                        "(robot CSV, skeleton "
                         ".urdf), .urdf (URDF)",
                     writers = "writers: .bvh (BVH), .csv (robot CSV), .json (robot JSON)";
   // Writing .fbx: no writer claims it (it used to get BVH text). Invalid graph, nothing written.

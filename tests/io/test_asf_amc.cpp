@@ -539,6 +539,22 @@ TEST_CASE("asf/amc import: units, fps and notes", "[io][asf][data]") {
   CHECK(cm.motion.values(0, 3) == Approx(def.motion.values(0, 3)));
 }
 
+TEST_CASE("asf alone: import_motion reads its rest pose as one frame in metres", "[io][asf][data]") {
+  const fs::path asf = kAsfDir / "16.asf", amc = kAsfDir / "16_15.amc";
+  if (!have({asf, amc})) return;
+  const auto rest = kg::io::import_motion(asf.string(), "", {});
+  const auto clip = kg::io::import_asf_amc(asf.string(), amc.string(), {.trim = "none"});
+  CHECK(rest.motion.frame_count() == 1);
+  CHECK(rest.motion.values.isZero(0));
+  CHECK(contains(rest.notes, "an ASF skeleton alone"));
+  const auto& a = *rest.motion.skeleton;
+  const auto& b = *clip.motion.skeleton;
+  REQUIRE(a.joint_count() == b.joint_count());
+  for (int j = 0; j < a.joint_count(); ++j) CHECK((a.joint(j).offset - b.joint(j).offset).norm() < 1e-12);
+  CHECK_THROWS_WITH(kg::io::import_motion(asf.string(), amc.string(), {}),
+                    Catch::Contains("the skeleton itself"));
+}
+
 TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][nodes]") {
   const auto& asf_type = node_type("io.import_asf_amc");
   const auto& any_type = node_type("io.import_motion");
@@ -593,11 +609,10 @@ TEST_CASE("asf/amc nodes: io.import_asf_amc and io.import_motion", "[io][asf][no
         run_node(registry, "io.import_motion",
                  params_for(any_type.spec, {{"path", bvh.string()}, {"skeleton", asf.string()}})),
         Catch::Contains("holds its own skeleton"));
-    CHECK_THROWS_WITH(
-        run_node(registry, "io.import_motion",
-                 params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}})),
-        Catch::Contains(
-            "no motion reader claims '.c3d'; readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH)"));
+    CHECK_THROWS_WITH(run_node(registry, "io.import_motion",
+                               params_for(any_type.spec, {{"path", (dir / "x.c3d").string()}})),
+                      Catch::Contains("no motion reader claims '.c3d'; readers: .amc (ASF/AMC, skeleton "
+                                      ".asf), .asf (ASF skeleton), .bvh (BVH)"));
   }
 }
 

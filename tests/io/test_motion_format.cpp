@@ -42,7 +42,8 @@ const std::string kBvh =
     "Frame Time: 0.0333333\n0 90 0 0 0 0 10 0 0\n1 90 0 0 0 0 20 0 0\n2 90 0 0 0 0 30 0 0\n";
 
 const std::string kBuiltinReaders =
-    ".amc (ASF/AMC, skeleton .asf), .bvh (BVH), .csv (robot CSV, skeleton .urdf), .urdf (URDF)";
+    ".amc (ASF/AMC, skeleton .asf), .asf (ASF skeleton), .bvh (BVH), .csv (robot CSV, skeleton .urdf), .urdf "
+    "(URDF)";
 const std::string kBuiltinWriters = ".bvh (BVH), .csv (robot CSV), .json (robot JSON)";
 
 // A format of the test's own, as a plugin would bring: ".TXT" files (claimed in upper case, so
@@ -118,9 +119,10 @@ TEST_CASE("motion formats: the built-ins claim their extensions in any case", "[
   CHECK(message_of([&] { kg::io::motion_reader_for("clip.c3d", formats); }) ==
         "clip.c3d: no motion reader claims '.c3d'; readers: " + kBuiltinReaders +
             "; writers: " + kBuiltinWriters);
-  CHECK(message_of([&] { kg::io::motion_reader_for("16.asf", formats); }) ==
-        "16.asf: no motion reader claims '.asf'; readers: " + kBuiltinReaders +
-            "; writers: " + kBuiltinWriters);
+  CHECK(kg::io::motion_reader_for("16.ASF", formats)->name == "ASF skeleton");
+  CHECK(message_of([&] { kg::io::motion_writer_for("16.asf", formats); }) ==
+        "16.asf: no motion writer claims '.asf'; writers: " + kBuiltinWriters +
+            "; readers: " + kBuiltinReaders);
   CHECK(message_of([&] { kg::io::motion_reader_for("dir/clip", formats); }) ==
         "dir/clip: no motion reader claims a file without an extension; readers: " + kBuiltinReaders +
             "; writers: " + kBuiltinWriters);
@@ -208,8 +210,9 @@ TEST_CASE("a format registered like a plugin's plugs into both nodes", "[io][for
   const kg::test::TempDir dir;
   const fs::path in_path = dir.write("small.bvh", kBvh);
   const kg::graph::Registry registry = io_registry(true);
-  CHECK(registry.names<MotionFormat>() ==
-        std::vector<std::string>{"ASF/AMC", "BVH", "Test text", "URDF", "robot CSV", "robot JSON"});
+  CHECK(registry.names<MotionFormat>() == std::vector<std::string>{"ASF skeleton", "ASF/AMC", "BVH",
+                                                                   "Test text", "URDF", "robot CSV",
+                                                                   "robot JSON"});
 
   const auto in = run_node(registry, "io.import_motion",
                            params_for(registry, "io.import_motion", {{"path", in_path.string()}}));
@@ -233,6 +236,7 @@ TEST_CASE("a format registered like a plugin's plugs into both nodes", "[io][for
                            params_for(registry, "io.export_motion", {{"path", std::string("x.fbx")}})),
       "x.fbx: no motion writer claims '.fbx'; writers: .bvh (BVH), .csv (robot CSV), .json (robot JSON), "
       ".txt "
-      "(Test text); readers: .amc (ASF/AMC, skeleton .asf), .bvh (BVH), .csv (robot CSV, skeleton .urdf), "
+      "(Test text); readers: .amc (ASF/AMC, skeleton .asf), .asf (ASF skeleton), .bvh (BVH), .csv (robot "
+      "CSV, skeleton .urdf), "
       ".txt (Test text), .urdf (URDF)");
 }

@@ -18,6 +18,7 @@ std::vector<graph::NodeType> synth_node_types();  // motion.synthesize (nodes/sy
 // nodes/retarget: retarget.target, retarget.constraints_on_target, retarget.initial_estimate,
 // retarget.key_spacing
 std::vector<graph::NodeType> retarget_target_node_types();
+std::vector<graph::NodeType> retarget_map_node_types();  // retarget.propose_map, retarget.write_map
 // retarget.footplants, retarget.constraints, retarget.merge_constraints
 std::vector<graph::NodeType> retarget_constraint_node_types();
 std::vector<graph::NodeType> retarget_spacetime_node_types();  // retarget.spacetime

@@ -56,12 +56,16 @@ using MotionFormats = std::vector<std::shared_ptr<const MotionFormat>>;
 // BVH (.bvh: reads and writes; bvh.hpp) and ASF/AMC (.amc with its .asf: reads; asf_amc.hpp).
 std::shared_ptr<const MotionFormat> bvh_format();
 std::shared_ptr<const MotionFormat> asf_amc_format();
+// An ASF skeleton alone (.asf: reads its rest pose as a one-frame clip, e.g. a retargeting
+// target or `kinegraph map`'s).
+std::shared_ptr<const MotionFormat> asf_format();
 // URDF (.urdf: reads a robot's tree as a one-frame clip; urdf.hpp), and a robot's motion written
 // as .csv or .json (robot_motion.hpp; a motion on a URDF's skeleton).
 std::shared_ptr<const MotionFormat> urdf_format();
 std::shared_ptr<const MotionFormat> robot_csv_format();
 std::shared_ptr<const MotionFormat> robot_json_format();
-// {asf_amc_format(), bvh_format(), urdf_format(), robot_csv_format(), robot_json_format()}
+// {asf_amc_format(), asf_format(), bvh_format(), urdf_format(), robot_csv_format(),
+// robot_json_format()}
 MotionFormats builtin_motion_formats();
 
 // The one format of `formats` that reads (writes) files named like `path`, by its extension

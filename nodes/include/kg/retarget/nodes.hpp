@@ -10,11 +10,20 @@
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
 #include "kg/retarget/key_spacing.hpp"
+#include "kg/retarget/skeleton_map.hpp"
 #include "kg/retarget/target.hpp"
 
 KG_DECLARE_TYPE(kg::retarget::ConstraintSet, "kg.Constraints")
 KG_DECLARE_TYPE(kg::retarget::KeySpacing, "kg.KeySpacing")
 KG_DECLARE_TYPE(kg::retarget::Target, "kg.Target")
+namespace kg::retarget {
+// A skeleton map on a port, with the two skeletons its joint indices refer to.
+struct SkeletonMapValue {
+  SkeletonMap map;
+  std::shared_ptr<const motion::Skeleton> source, target;
+};
+}  // namespace kg::retarget
+KG_DECLARE_TYPE(kg::retarget::SkeletonMapValue, "kg.SkeletonMap")
 // The constraint kinds of the solvers, built in or from plugins (registry extensions).
 KG_DECLARE_INTERFACE(kg::retarget::ConstraintKind, "kg.ConstraintKind")
 
