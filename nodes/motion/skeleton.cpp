@@ -176,6 +176,12 @@ double Skeleton::rest_height() const {
   return hi - lo;
 }
 
+std::vector<Eigen::Vector3d> Skeleton::rest_world_origins() const {
+  std::vector<Eigen::Vector3d> origin = rest_origins();
+  for (Eigen::Vector3d& p : origin) p = file_to_world * p;
+  return origin;
+}
+
 std::vector<Eigen::Vector3d> Skeleton::rest_origins() const {
   std::vector<Eigen::Vector3d> origin(joints_.size());
   for (std::size_t j = 0; j < joints_.size(); ++j) {

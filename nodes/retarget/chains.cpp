@@ -42,7 +42,7 @@ struct Tree {
         children(s.joint_count()),
         reach(s.joint_count(), 0.0),
         count(s.joint_count(), 1),
-        rest(s.rest_origins()) {
+        rest(s.rest_world_origins()) {
     for (int j = 0; j < s.joint_count(); ++j)
       if (s.joint(j).parent >= 0) children[s.joint(j).parent].push_back(j);
     for (int j = s.joint_count() - 1; j >= 0; --j) {
@@ -52,7 +52,6 @@ struct Tree {
         count[j] += count[c];
       }
     }
-    for (Eigen::Vector3d& p : rest) p = s.file_to_world * p;
     for (int j = 0; j < s.joint_count(); ++j)
       if (s.joint(j).parent < 0) tiny = std::max(tiny, 1e-5 * reach[j]);
   }

@@ -115,7 +115,7 @@ class FrameProblem {
       for (int r = 0; r < s.rows; ++r) {
         const bool ineq = s.kind->is_inequality(c, r);
         const double value = ws_.residual(r);
-        worst = std::max(worst, row_violation(value, ineq));
+        if (!c.soft) worst = std::max(worst, row_violation(value, ineq));
         const bool active = !ineq || value < 0;
         rho(row0 + r) = active ? c.weight * value : 0.0;
       }
@@ -320,6 +320,7 @@ void measure_violations(const ConstraintSet& set, const KindFinder& kinds, const
                         const std::vector<std::vector<Eigen::Isometry3d>>& solved_world, Workspace& ws,
                         PerFrameIkResult& result) {
   for (const Constraint& c : set.constraints) {
+    if (c.soft) continue;
     const ConstraintKind* kind = kinds(c.kind);
     const int rows = kind->rows(c);
     const std::size_t np = c.points.size();

@@ -450,28 +450,34 @@ void write_skeleton_map(std::ostream& os, const SkeletonMap& map, const Skeleton
   }
 }
 
+Eigen::Matrix3d body_frame(const SkeletonChains& chains, const Skeleton& skeleton, const std::string& side) {
+  const std::vector<Eigen::Vector3d> p = skeleton.rest_world_origins();
+  const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
+  for (const auto* limbs : {&chains.legs, &chains.arms}) {
+    const Limb &l = (*limbs)[kLeft], &r = (*limbs)[kRight];
+    if (l.upper < 0 || r.upper < 0 || l.upper >= skeleton.joint_count() || r.upper >= skeleton.joint_count())
+      continue;
+    Eigen::Vector3d d = p[l.upper] - p[r.upper];
+    d -= d.dot(up) * up;
+    if (d.norm() > 1e-9) {
+      Eigen::Matrix3d f;
+      f.col(0) = d.normalized();
+      f.col(1) = up;
+      f.col(2) = f.col(0).cross(up);
+      return f;
+    }
+  }
+  throw std::invalid_argument(
+      "skeleton map: the " + side +
+      " chains give no left (neither legs nor arms on both sides), which an orientation "
+      "pair and the adapted figure need");
+}
+
 std::vector<Eigen::Matrix3d> rest_offsets(const SkeletonMap& map, const std::vector<FeaturePair>& pairs,
                                           const Skeleton& source, const Skeleton& target) {
   std::vector<Eigen::Matrix3d> out(pairs.size(), Eigen::Matrix3d::Identity());
-  auto rest = [](const Skeleton& sk) {
-    std::vector<Eigen::Vector3d> p = sk.rest_origins();
-    for (Eigen::Vector3d& x : p) x = sk.file_to_world * x;
-    return p;
-  };
-  const std::vector<Eigen::Vector3d> ps = rest(source), pt = rest(target);
+  const std::vector<Eigen::Vector3d> ps = source.rest_world_origins(), pt = target.rest_world_origins();
   const Eigen::Vector3d up = Eigen::Vector3d::UnitY();
-  auto left_of = [&](const SkeletonChains& c, const std::vector<Eigen::Vector3d>& p, const char* side) {
-    for (const auto* limbs : {&c.legs, &c.arms}) {
-      const Limb &l = (*limbs)[kLeft], &r = (*limbs)[kRight];
-      if (l.upper < 0 || r.upper < 0) continue;
-      Eigen::Vector3d d = p[l.upper] - p[r.upper];
-      d -= d.dot(up) * up;
-      if (d.norm() > 1e-9) return Eigen::Vector3d(d.normalized());
-    }
-    throw std::invalid_argument(
-        std::string("skeleton map: the ") + side +
-        " chains give no left (neither legs nor arms on both sides), which an orientation pair needs");
-  };
   // The joint's own axis: world up on the body's trunk, else toward its child reaching furthest.
   auto own_axis = [&](const SkeletonChains& c, const Skeleton& sk, const std::vector<Eigen::Vector3d>& p,
                       int j) {
@@ -502,8 +508,8 @@ std::vector<Eigen::Matrix3d> rest_offsets(const SkeletonMap& map, const std::vec
   bool need = false;
   for (const FeaturePair& p : pairs) need = need || p.kind == FeatureKind::Orientation;
   if (!need) return out;
-  const Eigen::Vector3d ls = left_of(map.source.chains, ps, "source"),
-                        lt = left_of(map.target.chains, pt, "target");
+  const Eigen::Vector3d ls = body_frame(map.source.chains, source, "source").col(0),
+                        lt = body_frame(map.target.chains, target, "target").col(0);
   for (std::size_t i = 0; i < pairs.size(); ++i) {
     const FeaturePair& p = pairs[i];
     if (p.kind != FeatureKind::Orientation) continue;

@@ -892,8 +892,14 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
   check_characters(problem);
   const int frames = problem.characters[0].initial.frame_count();
   std::vector<KindInfo> kinds;
-  for (const Constraint& c : problem.constraints->constraints)
+  for (const Constraint& c : problem.constraints->constraints) {
+    if (c.soft)
+      throw std::invalid_argument(
+          "spacetime: constraint '" + c.label +
+          "' is soft (an objective term), which the spacetime solver does not take yet; "
+          "solve it with the per-frame IK or make it required");
     kinds.push_back(check_constraint(problem, c, frames));
+  }
   return kinds;
 }
 

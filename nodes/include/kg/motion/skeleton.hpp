@@ -90,6 +90,8 @@ class Skeleton {
   // Every joint's origin in the rest pose (every rotation channel zero, the root at the origin),
   // file coordinates (apply file_to_world for world), metres; one per joint.
   std::vector<Eigen::Vector3d> rest_origins() const;
+  // The same in world coordinates (file_to_world applied).
+  std::vector<Eigen::Vector3d> rest_world_origins() const;
 
   // Standing height estimate: vertical extent (world Y) of joints and end sites in the rest
   // pose, metres.

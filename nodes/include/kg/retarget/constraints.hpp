@@ -62,6 +62,11 @@ struct Constraint {
   std::vector<double> params{};  // the kind's numbers (see each kind's doc)
   std::vector<Sample> samples{};
   double weight = 1.0;  // row scale in least squares
+  // An objective term, not a requirement (§8's "best matching motion": features a target of
+  // another structure can only approach): its rows enter the least squares with `weight` like any
+  // others, but no solver waits for them to hold and they count in no violation or unmet figure.
+  // solve_per_frame_ik honours it; solve_spacetime refuses soft constraints (not built yet).
+  bool soft = false;
 };
 
 // Point i of `constraint` as sample `sample` reads it (its local offset replaced by the sample's).

@@ -20,6 +20,9 @@
 // the others have zero Jacobian columns and stay at q0 exactly, so leaving them out is exact.
 // A frame stops when its rows are met (options.tolerance) and the step is below 1e-7 m (M-weighted),
 // or when no step lowers F (then, if rows are still violated, the frame counts as unmet).
+// Soft constraints (Constraint::soft) weigh in F but are never waited for: a frame's "met" and
+// the result's worst_violation and frames_unmet look at required rows only, so a frame with soft
+// rows alone stops when its step is below 1e-7 m or no step lowers F.
 //
 // Which rows a frame sees: a sample belongs to the latest frame it reads. Its points and values
 // at that frame are unknowns; those it reads at earlier frames are fixed at their already-solved

@@ -208,6 +208,13 @@ ProposedMap propose_map(const motion::Skeleton& source, const motion::Skeleton& 
 // leaf. The rule find_chains follows a limb by, and rest_offsets a limb joint's axis by.
 int furthest_child(const motion::Skeleton& skeleton, int joint);
 
+// The body's frame in the rest pose (world): columns left (left hip minus right hip from the
+// chains' legs, else left shoulder minus right shoulder, made horizontal), up (world +Y), and
+// forward (left x up). `side` names the skeleton in the message when the chains give no left
+// (std::invalid_argument).
+Eigen::Matrix3d body_frame(const SkeletonChains& chains, const motion::Skeleton& skeleton,
+                           const std::string& side);
+
 // For each pair (same order), the constant rotation R with target_world ≈ source_world * R for
 // an orientation pair (identity for other kinds). Each side's joint gets an anatomical frame in
 // its rest pose: its first axis the body's left (left hip minus right hip from the map's legs,
