@@ -230,6 +230,7 @@ Limb limb_roles(const Tree& t, const std::vector<int>& path, const std::vector<i
   for (const LimbRole& r : limb_role_table(w.kind == std::string("leg")))
     if (limb.*r.joint >= 0) line += std::string(" ") + r.name + " " + t.name(limb.*r.joint);
   notes.push_back(line + " (" + (w.kind == std::string("leg") ? "knee " : "elbow ") + how + ")");
+  if (w.kind == std::string("leg")) limb.foot = limb.end >= 0 ? t.sk.joint(limb.end).parent : limb.lower;
   return limb;
 }
 

@@ -218,11 +218,11 @@ class FrameSolver {
   FrameSolver(const motion::Skeleton& skeleton, const PerFrameIkOptions& options)
       : options_(options), m_(channel_sensitivity(skeleton)), eps_m_(options.epsilon * m_) {}
 
-  // Solves the frame from q0; returns the iterations and leaves q() and worst() (the worst
-  // unweighted violation of its rows at q).
-  int solve(FrameProblem& problem, const Eigen::RowVectorXd& q0) {
+  // Solves the frame from `start`, damped toward q0; returns the iterations and leaves q() and
+  // worst() (the worst unweighted violation of its rows at q).
+  int solve(FrameProblem& problem, const Eigen::RowVectorXd& q0, const Eigen::RowVectorXd& start) {
     q0_ = q0;
-    q_ = q0_;
+    q_ = start;
     select_unknowns(problem);
     lambda_ = 1e-4;
     problem.evaluate(q_, rho_, worst_, &jac_);
@@ -396,7 +396,12 @@ PerFrameIkResult solve_per_frame_ik(const Motion& initial, const ConstraintSet& 
     if (!samples.empty()) {
       ++result.frames_constrained;
       FrameProblem problem(skeleton, out, solved_world, std::move(samples), f, ws);
-      const int it = solver.solve(problem, initial.values.row(f));
+      // Warm: the previous frame's solution moved as the initial motion moves between the two.
+      const bool warm = options.warm_start && f > 0;
+      const Eigen::RowVectorXd start_q =
+          warm ? Eigen::RowVectorXd(out.values.row(f - 1) + initial.values.row(f) - initial.values.row(f - 1))
+               : Eigen::RowVectorXd(initial.values.row(f));
+      const int it = solver.solve(problem, initial.values.row(f), start_q);
       result.iterations += it;
       result.max_frame_iterations = std::max(result.max_frame_iterations, it);
       if (solver.worst() > options.tolerance) unmet.push_back(f);

@@ -76,6 +76,8 @@ std::vector<FeaturePair> chain_pairs(const SkeletonChains& s, const SkeletonChai
     at_role(c, a, b, kLegRoles[1], 1);  // knee
     at_role(c, a, b, kLegRoles[2], 4);  // ankle
     at_role(c, a, b, kLegRoles[3], 2);  // toe
+    if (a.foot >= 0 && b.foot >= 0)
+      add(c + "foot", FeatureKind::Orientation, point(a.foot), point(b.foot), 1);
     if (a.upper >= 0 && b.upper >= 0 && a.middle >= 0 && b.middle >= 0)
       add(c + "thigh", FeatureKind::Direction, direction(a.upper, a.middle), direction(b.upper, b.middle), 1);
     if (a.middle >= 0 && b.middle >= 0 && a.lower >= 0 && b.lower >= 0)
@@ -143,6 +145,7 @@ class MapReader : public kg::YamlReader {
              n);
     for (int j : {l.root, l.upper, l.middle, l.lower, l.end})
       if (j >= 0) l.path.push_back(j);
+    if (leg) l.foot = l.end >= 0 ? sk.joint(l.end).parent : l.lower;
     return l;
   }
 

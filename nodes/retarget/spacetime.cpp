@@ -138,8 +138,10 @@ class Pass {
     return 0.5 * f + 0.5 * options_.epsilon * reg;
   }
 
+  // Required rows only (soft rows are never waited for).
   bool within_tolerance() const {
     for (int i = 0; i < rows_total_; ++i) {
+      if (soft_[static_cast<std::size_t>(i)]) continue;
       const double r = r_[i];
       if (inequality_[static_cast<std::size_t>(i)]) {
         if (-r > options_.inequality_tolerance) return false;
@@ -241,12 +243,15 @@ class Pass {
     for (int i = 0; i < rows_total_; ++i)
       if (held_[static_cast<std::size_t>(i)] && r_[i] > margin) held_[static_cast<std::size_t>(i)] = 0;
   }
-  double worst_violation() const {
+  double worst_violation() const {  // of required rows
     double w = 0;
     for (int i = 0; i < rows_total_; ++i)
-      w = std::max(w, inequality_[static_cast<std::size_t>(i)] ? -r_[i] : std::abs(r_[i]));
+      if (!soft_[static_cast<std::size_t>(i)])
+        w = std::max(w, inequality_[static_cast<std::size_t>(i)] ? -r_[i] : std::abs(r_[i]));
     return w;
   }
+  bool has_soft() const { return has_soft_; }
+  bool row_soft(int row) const { return soft_[static_cast<std::size_t>(row)] != 0; }
   int active_count() const {
     int n = 0;
     for (int i = 0; i < rows_total_; ++i) n += row_active(i) ? 1 : 0;
@@ -368,6 +373,8 @@ class Pass {
     const KindInfo& kind = kinds_[static_cast<std::size_t>(s.constraint)];
     for (int r = 0; r < s.rows; ++r) {
       inequality_.push_back(kind.inequality[static_cast<std::size_t>(r)]);
+      soft_.push_back(con.soft ? 1 : 0);
+      has_soft_ = has_soft_ || con.soft;
       weight_.push_back(con.weight);
     }
     rows_total_ += s.rows;
@@ -760,6 +767,8 @@ class Pass {
   std::vector<Group> groups_;
   std::vector<int> multi_;
   std::vector<char> inequality_;
+  std::vector<char> soft_;  // rows of soft constraints: in F, never waited for
+  bool has_soft_ = false;
   std::vector<double> weight_;
   std::vector<char> active_;
   std::vector<char> held_;  // satisfied inequality rows kept in the working set (see hold_blocking)
@@ -892,14 +901,8 @@ std::vector<KindInfo> check_problem(const SpacetimeProblem& problem) {
   check_characters(problem);
   const int frames = problem.characters[0].initial.frame_count();
   std::vector<KindInfo> kinds;
-  for (const Constraint& c : problem.constraints->constraints) {
-    if (c.soft)
-      throw std::invalid_argument(
-          "spacetime: constraint '" + c.label +
-          "' is soft (an objective term), which the spacetime solver does not take yet; "
-          "solve it with the per-frame IK or make it required");
+  for (const Constraint& c : problem.constraints->constraints)
     kinds.push_back(check_constraint(problem, c, frames));
-  }
   return kinds;
 }
 
@@ -1064,7 +1067,10 @@ PassOutcome iterate_pass(Pass& pass, const SpacetimeOptions& o, bool can_densify
   pass.evaluate(s.x, true);
   s.F = pass.objective(s.x);
   s.lambda = o.initial_damping;
-  PassOutcome out{pass.within_tolerance(), "iteration limit"};
+  // With soft rows the pass goes on past the required rows' tolerance until F stops falling (or
+  // the iteration limit): the soft rows are minimised, not met.
+  const bool minimise = pass.has_soft();
+  PassOutcome out{pass.within_tolerance() && !minimise, "iteration limit"};
   Progress progress{pass.worst_violation(), {}, can_densify};
   progress.history.push_back(progress.worst_before);
   while (!out.converged && s.iterations < o.max_iterations) {
@@ -1090,7 +1096,7 @@ PassOutcome iterate_pass(Pass& pass, const SpacetimeOptions& o, bool can_densify
     s.x.swap(s.trial);
     s.F = ls.F_trial;
     pass.evaluate(s.x, true);
-    out.converged = pass.within_tolerance();
+    out.converged = pass.within_tolerance() && !minimise;
     if (o.trace) trace_iteration(pass, s, ls.alpha, step_norm, result.passes, start, o);
     if (out.converged) break;
     if (const char* stop = stop_test(pass, progress, step_norm, s.F, decrease, ls.alpha, o); *stop != 0) {
@@ -1098,6 +1104,7 @@ PassOutcome iterate_pass(Pass& pass, const SpacetimeOptions& o, bool can_densify
       break;
     }
   }
+  if (minimise) out.converged = pass.within_tolerance();
   result.iterations += s.iterations;
   return out;
 }
@@ -1153,6 +1160,7 @@ void report_pass(const Pass& pass, const std::vector<Character>& chars, const Co
   std::map<int, ViolatedConstraint> by_constraint;
   for (const SampleInfo& s : pass.samples()) {
     const Constraint& con = set.constraints[static_cast<std::size_t>(s.constraint)];
+    if (con.soft) continue;  // minimised, not required: in no violation figure
     KindReport& kr = by_kind[con.kind];
     kr.kind = con.kind;
     const std::vector<int>& frames = con.samples[static_cast<std::size_t>(s.sample)].frames;

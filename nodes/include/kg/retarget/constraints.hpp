@@ -65,7 +65,6 @@ struct Constraint {
   // An objective term, not a requirement (§8's "best matching motion": features a target of
   // another structure can only approach): its rows enter the least squares with `weight` like any
   // others, but no solver waits for them to hold and they count in no violation or unmet figure.
-  // solve_per_frame_ik honours it; solve_spacetime refuses soft constraints (not built yet).
   bool soft = false;
 };
 

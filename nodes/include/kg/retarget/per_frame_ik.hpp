@@ -49,6 +49,11 @@ struct PerFrameIkOptions {
   int max_iterations = 50;  // Levenberg-Marquardt iterations per frame
   double tolerance = 1e-4;  // a frame's rows are met when every |r| (equality) and max(0, -r)
                             // (inequality) is at most this: metres, or radians for channel rows
+  // Each frame starts from the previous frame's solution moved as the initial motion moves
+  // between the two (q*_{f-1} + q0_f - q0_{f-1}) instead of from q0_f; the damping still pulls
+  // toward q0_f. For a target far from its initial pose (a robot started at its rest pose), where
+  // a cold start can land each frame in another local minimum (a flipped hip).
+  bool warm_start = false;
   // Throws std::invalid_argument naming the field, its value and its range when a field is out
   // of the range stated above (DESIGN.md 15); node factories call it when the graph loads.
   void validate() const;

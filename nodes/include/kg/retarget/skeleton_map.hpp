@@ -38,6 +38,7 @@
 //   pelvis.position (1), pelvis.orientation (1), spine.chest (orientation, 0.5),
 //   spine.direction (pelvis -> chest, 1), neck.head (position, 1), neck.orientation (0.5),
 //   LEG.knee (position, 1), LEG.ankle (position, 4), LEG.toe (position, 2; when both have a toe),
+//   LEG.foot (orientation of Limb::foot, 1),
 //   LEG.thigh (direction hip -> knee, 1), LEG.shin (direction knee -> ankle, 1),
 //   ARM.elbow (position, 1), ARM.wrist (position, 2), ARM.upper_arm (direction shoulder ->
 //   elbow, 1), ARM.forearm (direction elbow -> wrist, 1).
@@ -75,6 +76,10 @@ struct Limb {
   int middle = -1;  // knee | elbow
   int lower = -1;   // ankle | wrist
   int end = -1;     // toe (legs; -1 when none); unused for arms
+  // Legs: the joint carrying the foot segment, whose rotation is the foot's: the toe's parent
+  // (a robot's ankle roll below its ankle pitch), the ankle when there is no toe. Derived, not a
+  // role of map files; -1 for arms.
+  int foot = -1;
   std::vector<int> path{};
   bool found() const { return upper >= 0 && middle >= 0 && lower >= 0; }
 };

@@ -26,6 +26,10 @@
 // tolerance join a working set before the step is solved again (they then resist moving along
 // their Jacobian without pulling: their residual counts as 0 while satisfied), and leave it once
 // the iterate is well inside them; this keeps joint limits from cutting every step short.
+// Soft constraints (Constraint::soft, §8's best matching motion) are objective terms: their rows
+// weigh in F, but a pass that has them goes on past the required rows' tolerance until F stops
+// falling (min_decrease, min_step) or max_iterations, it converges when the required rows hold,
+// and soft rows appear in no violation figure and never make the solve densify.
 // When a pass ends with constraints still violated past tolerance and `densify` is set, the
 // solve restarts from m1 + d with every key spacing halved (down to 1 frame), §4 step 5.
 //
