@@ -3,6 +3,7 @@
 #include "kg/retarget/map_retarget.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <initializer_list>
 #include <numbers>
@@ -13,8 +14,11 @@
 #include <Eigen/Geometry>
 
 #include "kg/base/text.hpp"
+#include "kg/motion/filters.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/motion/rotations.hpp"
+#include "kg/retarget/constraint_io.hpp"
+#include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/target.hpp"
 
 namespace kg::retarget {
@@ -360,6 +364,66 @@ Motion placed_rest_pose(const SkeletonMap& map, const Eigen::Matrix3d& pelvis_of
     }
     out.values.row(f) = q;
   }
+  return out;
+}
+
+void MapRetargetOptions::validate() const {
+  if (!(smooth_seconds > 0) || !std::isfinite(smooth_seconds))
+    throw std::invalid_argument("map retarget: smooth_seconds " + std::to_string(smooth_seconds) +
+                                " (expected a finite number > 0, seconds)");
+  if (frames_per_key < 1)
+    throw std::invalid_argument("map retarget: frames_per_key " + std::to_string(frames_per_key) +
+                                " (expected an integer >= 1)");
+  ik.validate();
+  spacetime.validate();
+}
+
+MapRetargetResult retarget_onto(const Motion& clip, const SkeletonMap& map,
+                                std::shared_ptr<const Skeleton> target, const KindFinder& kinds,
+                                const MapRetargetOptions& options) {
+  options.validate();
+  if (!clip.skeleton || !target)
+    throw std::invalid_argument("retarget_onto: a clip or target without a skeleton");
+  using Clock = std::chrono::steady_clock;
+  auto seconds_since = [](Clock::time_point t) {
+    return std::chrono::duration<double>(Clock::now() - t).count();
+  };
+  MapRetargetResult out;
+  auto t0 = Clock::now();
+  const Target adapted = adapted_target(map, clip.skeleton, *target, &out.notes);
+  out.adapted = scale_translation(clip, adapted);
+  out.adapted.skeleton = adapted.skeleton;
+  out.pairs = feature_pairs(map);
+  const std::vector<Eigen::Matrix3d> offsets = rest_offsets(map, out.pairs, *clip.skeleton, *target);
+  out.constraints = feature_constraints(out.pairs, offsets, out.adapted, *target);
+  out.feature_constraints = static_cast<int>(out.constraints.constraints.size());
+  ConstraintSet limits = joint_limit_constraints(*target, 0, clip.frame_count());
+  for (Constraint& c : limits.constraints) c.weight = kHardWeight;
+  merge_constraints(out.constraints, limits);
+  Eigen::Matrix3d pelvis_offset = Eigen::Matrix3d::Identity();
+  for (std::size_t i = 0; i < out.pairs.size(); ++i)
+    if (out.pairs[i].name == "pelvis.orientation") pelvis_offset = offsets[i];
+  const Motion start = placed_rest_pose(map, pelvis_offset, out.adapted, target, &out.notes);
+  out.seconds_adapt = seconds_since(t0);
+
+  t0 = Clock::now();
+  out.baseline = solve_per_frame_ik(start, out.constraints, kinds, options.ik);
+  out.seconds_ik = seconds_since(t0);
+
+  t0 = Clock::now();
+  Motion m1 = out.baseline.motion;
+  m1.values = motion::gaussian_smoothed(m1.values, std::max(options.smooth_seconds * m1.fps, 1e-3),
+                                        motion::CurveEnds::OddReflection);
+  SpacetimeProblem problem;
+  problem.characters.push_back(
+      {.initial = std::move(m1),
+       .frames_per_key =
+           std::vector<int>(static_cast<std::size_t>(target->channel_count()), options.frames_per_key)});
+  problem.constraints = &out.constraints;
+  problem.kinds = kinds;
+  problem.options = options.spacetime;
+  out.solve = solve_spacetime(problem);
+  out.seconds_spacetime = seconds_since(t0);
   return out;
 }
 

@@ -21,8 +21,11 @@
 #include <Eigen/Core>
 
 #include "kg/motion/motion.hpp"
+#include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/constraints.hpp"
+#include "kg/retarget/per_frame_ik.hpp"
 #include "kg/retarget/skeleton_map.hpp"
+#include "kg/retarget/spacetime.hpp"
 #include "kg/retarget/target.hpp"
 
 namespace kg::retarget {
@@ -78,5 +81,38 @@ ConstraintSet feature_constraints(const std::vector<FeaturePair>& pairs,
 motion::Motion placed_rest_pose(const SkeletonMap& map, const Eigen::Matrix3d& pelvis_offset,
                                 const motion::Motion& adapted, std::shared_ptr<const motion::Skeleton> target,
                                 std::vector<std::string>* notes = nullptr);
+
+// The whole solve of §8 on one clip (footplants on the target's feet are not carried yet).
+struct MapRetargetOptions {
+  double smooth_seconds = 1.0 / 30;  // Gaussian sigma low-passing the IK into m1 (> 0)
+  PerFrameIkOptions ik{.warm_start = true};
+  SpacetimeOptions spacetime{};
+  int frames_per_key = 4;  // the displacement's key spacing, every channel (>= 1)
+  // Throws std::invalid_argument naming the field, its value and its range.
+  void validate() const;
+};
+
+struct MapRetargetResult {
+  motion::Motion adapted;  // the source on the adapted figure (its structure, the target's proportions)
+  std::vector<FeaturePair> pairs;
+  ConstraintSet constraints;    // the features (soft unless hard), then the target's joint limits
+  int feature_constraints = 0;  // how many of `constraints` are features
+  PerFrameIkResult baseline;    // the per-frame IK on the same map: the baseline and m1's source
+  SpacetimeResult solve;        // the spacetime solve from m1; solve.motions[0] is the result
+  std::vector<std::string> notes;
+  double seconds_adapt = 0, seconds_ik = 0, seconds_spacetime = 0;  // wall time of each stage
+  const motion::Motion& motion() const { return solve.motions.front(); }
+};
+
+// adapted_target and scale_translation give the adapted clip; feature_constraints with the
+// target's joint limits (joint_limit_constraints, weighted kHardWeight: required beside soft rows)
+// the constraints; placed_rest_pose the start of the per-frame IK (warm-started), whose result,
+// low-passed (smooth_seconds), is the initial estimate m1 of the spacetime solve over the
+// target's own channels: the best matching motion of §8 by a displacement smooth at the key
+// spacing. Throws std::invalid_argument for bad options, a map that does not fit the skeletons,
+// or a map without a pelvis on both sides.
+MapRetargetResult retarget_onto(const motion::Motion& clip, const SkeletonMap& map,
+                                std::shared_ptr<const motion::Skeleton> target, const KindFinder& kinds,
+                                const MapRetargetOptions& options = {});
 
 }  // namespace kg::retarget
