@@ -60,10 +60,30 @@ Target adapted_target(const SkeletonMap& map, std::shared_ptr<const Skeleton> so
   auto note = [&](const std::string& line) {
     if (notes != nullptr) notes->push_back(line);
   };
+  const std::vector<Eigen::Vector3d> ps = source.rest_world_origins(), pt = target.rest_world_origins();
+  // The overall factor: the legs' length ratio (a rest pose need not stand: iClone's bones point
+  // elsewhere, and its rest hip height is 2 cm), else the rest hip heights'.
+  double leg_s = 0, leg_t = 0;
+  for (int side = 0; side < 2; ++side) {
+    const Limb &a = s.legs[side], &b = t.legs[side];
+    if (!a.found() || !b.found()) continue;
+    leg_s += (ps[a.middle] - ps[a.upper]).norm() + (ps[a.lower] - ps[a.middle]).norm();
+    leg_t += (pt[b.middle] - pt[b.upper]).norm() + (pt[b.lower] - pt[b.middle]).norm();
+  }
   const double hs = rest_hip_height(source), ht = rest_hip_height(target);
-  const double overall = hs > 0 && ht > 0 ? ht / hs : 1.0;
-  note("overall factor " + kg::text::significant(overall, 4) + " (rest hip heights: source " + metres(hs) +
-       ", target " + metres(ht) + "), for joints in no chain");
+  double overall = 1.0;
+  if (leg_s > 0 && leg_t > 0) {
+    overall = leg_t / leg_s;
+    note("overall factor " + kg::text::significant(overall, 4) + " (the legs' lengths: source " +
+         metres(leg_s) + ", target " + metres(leg_t) + "), for joints in no chain");
+  } else if (hs > 0 && ht > 0) {
+    overall = ht / hs;
+    note("overall factor " + kg::text::significant(overall, 4) +
+         " (no legs on both; rest hip heights: source " + metres(hs) + ", target " + metres(ht) +
+         "), for joints in no chain");
+  } else {
+    note("overall factor 1 (no legs on both, and a rest hip height is zero), for joints in no chain");
+  }
   auto fig = std::make_shared<Skeleton>(source);
   const Eigen::Matrix3d& W = source.file_to_world;
   for (int j = 0; j < fig->joint_count(); ++j) {
@@ -71,8 +91,7 @@ Target adapted_target(const SkeletonMap& map, std::shared_ptr<const Skeleton> so
     jt.offset *= overall;
     for (Eigen::Vector3d& e : jt.end_sites) e *= overall;
   }
-  const std::vector<Eigen::Vector3d> ps = source.rest_world_origins(), pt = target.rest_world_origins();
-  const double tiny = 1e-6 * std::max({hs, ht, 1e-3});
+  const double tiny = 1e-6 * std::max({hs, ht, leg_s, leg_t, 1e-3});
   auto scale_joint = [&](int j, double k) {
     motion::Joint& jt = fig->joint_mut(j);
     jt.offset = source.joint(j).offset * k;

@@ -44,8 +44,10 @@ namespace kg::retarget {
 //     where the target's do; joints two connections share (one joint carrying both hips) stay,
 //     and the rest of the connection makes up the difference; the head's subtree takes the neck's
 //     length ratio;
-//   - every other joint (and every joint of a chain only one side has) the overall factor, the
-//     ratio of the rest hip heights (rest_hip_height).
+//   - every other joint (and every joint of a chain only one side has) the overall factor: the
+//     ratio of the legs' lengths (hip -> knee -> ankle, both legs), which a rest pose that does not
+//     stand leaves alone; without legs on both, the ratio of the rest hip heights
+//     (rest_hip_height), else 1.
 // Each decision goes to `notes` (when not null) with its lengths. Throws std::invalid_argument when
 // a map joint is outside its skeleton, or the trunk's connections are asked for and a side's
 // chains give no left (body_frame).
