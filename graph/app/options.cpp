@@ -298,6 +298,8 @@ usage:
                   [--sbatch OPTION]... [--submit] [--jobs N] [--set NAME=VALUE]...
   kinegraph merge DIR
   kinegraph inspect CLIP [--skeleton ASF] [--json] [--set NAME=VALUE]... [--plugin-dir DIR]...
+  kinegraph map SOURCE TARGET [--out MAP.yaml] [--skeleton ASF] [--target-skeleton ASF]
+                [--plugin-dir DIR]...
   kinegraph --help | --version
 
 verbs:
@@ -331,6 +333,9 @@ verbs:
             implies (and the true rate when the header's is off by a whole factor), floor
             penetration, pops, and the --set values that fix what it found; --json prints the
             motion.inspect report. --set units=, up= and source_fps= read the clip otherwise
+  map       propose a skeleton map from SOURCE to TARGET (each a clip, an .asf or a URDF): the
+            chains found on each (pelvis, spine, neck, legs, arms) with their evidence, what was
+            paired and what was not; --out writes the map (YAML) to edit
 
 options:
   --set NAME=VALUE  give the graph variable NAME a value (GRAPH documents its variables at the top)

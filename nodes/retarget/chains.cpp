@@ -404,6 +404,12 @@ std::string chain_text(const Skeleton& s, const std::vector<int>& joints) {
   return kg::text::join(names, ", ");
 }
 
+std::vector<const char*> role_names(bool leg) {
+  std::vector<const char*> out;
+  for (const LimbRole& r : limb_role_table(leg)) out.push_back(r.name);
+  return out;
+}
+
 std::vector<int> limb_joints(const Limb& l, bool leg) {
   std::vector<int> out;
   for (const LimbRole& r : limb_role_table(leg)) out.push_back(l.*r.joint);
@@ -427,11 +433,23 @@ ProposedMap propose_map(const Skeleton& source, const Skeleton& target, const st
   const SkeletonChains& t = out.map.target.chains;
   for (const std::string& n : s.notes) out.notes.push_back("source: " + n);
   for (const std::string& n : t.notes) out.notes.push_back("target: " + n);
-  auto pair_line = [&](const std::string& name, const std::vector<int>& a, const std::vector<int>& b) {
+  // `roles` names a limb's entries (a and b in the role table's order) to say which one side lacks.
+  auto pair_line = [&](const std::string& name, const std::vector<int>& a, const std::vector<int>& b,
+                       const std::vector<const char*>& roles = {}) {
     const bool has_a = std::any_of(a.begin(), a.end(), [](int j) { return j >= 0; });
     const bool has_b = std::any_of(b.begin(), b.end(), [](int j) { return j >= 0; });
     if (has_a && has_b) {
-      out.matched.push_back(name + ": " + chain_text(source, a) + " -> " + chain_text(target, b));
+      std::string line = name + ": " + chain_text(source, a) + " -> " + chain_text(target, b);
+      if (!roles.empty() && a.size() == roles.size() && b.size() == roles.size()) {
+        std::vector<std::string> unpaired;
+        for (std::size_t r = 0; r < roles.size(); ++r)
+          if ((a[r] >= 0) != (b[r] >= 0))
+            unpaired.push_back(
+                std::string(roles[r]) + " (only the " + (a[r] >= 0 ? "source" : "target") +
+                " has one: " + (a[r] >= 0 ? source.joint(a[r]).name : target.joint(b[r]).name) + ")");
+        if (!unpaired.empty()) line += "; unpaired: " + kg::text::join(unpaired, ", ");
+      }
+      out.matched.push_back(line);
     } else if (has_a || has_b) {
       out.unmatched.push_back(name + ": only the " + (has_a ? "source" : "target") + " has it (" +
                               (has_a ? chain_text(source, a) : chain_text(target, b)) + ")");
@@ -444,9 +462,11 @@ ProposedMap propose_map(const Skeleton& source, const Skeleton& target, const st
   pair_line("neck", s.neck, t.neck);
   const char* sides[] = {"left", "right"};
   for (int k = 0; k < 2; ++k)
-    pair_line(std::string(sides[k]) + "_leg", limb_joints(s.legs[k], true), limb_joints(t.legs[k], true));
+    pair_line(std::string(sides[k]) + "_leg", limb_joints(s.legs[k], true), limb_joints(t.legs[k], true),
+              role_names(true));
   for (int k = 0; k < 2; ++k)
-    pair_line(std::string(sides[k]) + "_arm", limb_joints(s.arms[k], false), limb_joints(t.arms[k], false));
+    pair_line(std::string(sides[k]) + "_arm", limb_joints(s.arms[k], false), limb_joints(t.arms[k], false),
+              role_names(false));
   for (const std::string& m : s.missing) out.unmatched.push_back("source: " + m);
   for (const std::string& m : t.missing) out.unmatched.push_back("target: " + m);
   return out;

@@ -603,6 +603,7 @@ ViolationSummary summarize_violations(const ConstraintSet& set, const Constraint
   Scratch scratch;
   Eigen::VectorXd r;
   for (const Constraint& c : set.constraints) {
+    if (c.soft) continue;  // an objective term: never a violation
     const ConstraintKind* kind = kinds.find(c.kind);
     if (kind == nullptr) throw_unknown_kind(c, kinds.names());
     KindViolation& kv = by_kind[c.kind];

@@ -118,7 +118,7 @@ std::vector<PlantSkate> find_plants(const ConstraintSet& set) {
   for (std::size_t ci = 0; ci < set.constraints.size(); ++ci) {
     const Constraint& c = set.constraints[ci];
     const bool position = c.kind == "position", same_place = c.kind == "same_place";
-    if (!position && !same_place) continue;
+    if (c.soft || (!position && !same_place)) continue;  // a soft feature that stays put is no plant
     if (std::any_of(c.points.begin(), c.points.end(), [](const PointRef& p) { return p.character != 0; }))
       continue;
     // A target that moves on the floor is not a plant (a height that changes is: a morphing foot).

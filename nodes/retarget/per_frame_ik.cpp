@@ -222,8 +222,10 @@ class FrameSolver {
   // worst() (the worst unweighted violation of its rows at q).
   int solve(FrameProblem& problem, const Eigen::RowVectorXd& q0, const Eigen::RowVectorXd& start) {
     q0_ = q0;
-    q_ = start;
+    q_ = q0;
     select_unknowns(problem);
+    // Only the frame's unknowns start warm: the other channels stay at q0 exactly.
+    for (int c : cols_) q_(c) = start(c);
     lambda_ = 1e-4;
     problem.evaluate(q_, rho_, worst_, &jac_);
     value_ = objective(rho_, q_);

@@ -438,7 +438,8 @@ void write_skeleton_map(std::ostream& os, const SkeletonMap& map, const Skeleton
   os << "pairs:\n";
   for (const SkeletonMap::Change& c : map.changes) {
     os << "  - {name: " << yaml_name(c.name);
-    if (c.weight > 0) os << ", weight: " << kg::text::format_double(c.weight);
+    if (c.weight > 0 && c.hard != 1)
+      os << ", weight: " << kg::text::format_double(c.weight);  // hard takes none
     if (c.hard >= 0) os << ", hard: " << (c.hard ? "true" : "false");
     os << "}\n";
   }

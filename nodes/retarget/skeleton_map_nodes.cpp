@@ -51,7 +51,6 @@ class ProposeMapNode final : public graph::Node {
             "warning: no chain is on both skeletons, so the map pairs nothing; name the chains or write "
             "pairs "
             "of your own in the map file");
-        ctx.log(summary.back());
       }
       list("summary", summary);
       list("matched", p.matched);
@@ -90,7 +89,7 @@ graph::NodeType propose_map_type() {
       .type = "retarget.propose_map",
       .version = 1,
       .doc =
-          "Proposes a skeleton map (Gleicher 1998 8) between the source's skeleton and a target of any "
+          "Proposes a skeleton map (Gleicher 1998 §8) between the source's skeleton and a target of any "
           "structure: each skeleton's chains (pelvis, spine, neck, legs, arms) found from its tree (the legs "
           "and arms as the two longest mirrored pairs of limbs), its names (knee, elbow, ... with the side "
           "marker removed) and its rest pose (left and right when the names do not say), then paired by "

@@ -1025,6 +1025,14 @@ struct Progress {
 // stops. F and `decrease` are the objective after the step and what the step took off it.
 const char* stop_test(const Pass& pass, Progress& p, double step_norm, double F, double decrease,
                       double alpha, const SpacetimeOptions& o) {
+  // Soft rows minimised with the required ones met: only F's own progress stops the pass (the
+  // tests on the worst violation would stop it on a required row's last 1e-7).
+  if (pass.has_soft() && pass.within_tolerance()) {
+    if (step_norm < o.min_step ||
+        decrease <= (alpha == 1 ? o.min_decrease : o.min_decrease_short) * (F + decrease))
+      return "no further progress";
+    return "";
+  }
   // Stalled: what is left is what this key spacing can do (or the constraints contradict).
   const double worst_now = pass.worst_violation();
   const bool worst_stuck = worst_now > o.stuck_ratio * p.worst_before;

@@ -7,7 +7,7 @@
 //   Target adapted = adapted_target(map, clip.skeleton, target_skeleton, &notes);
 //   motion::Motion a = scale_translation(clip, adapted);                    // initial_estimate.hpp
 //   a.skeleton = adapted.skeleton;                                          // the adapted figure
-//   ConstraintSet features = feature_constraints(map, pairs, offsets, a, target_skeleton);
+//   ConstraintSet features = feature_constraints(pairs, offsets, a, target_skeleton);
 //   motion::Motion start = placed_rest_pose(map, offsets_of_pelvis, a, target_ptr);
 //   PerFrameIkResult baseline = solve_per_frame_ik(start, features, kinds);  // per_frame_ik.hpp
 //
