@@ -17,6 +17,7 @@
 #include "kg/motion/kinematics.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
 #include "kg/retarget/map_retarget.hpp"
+#include "kg/retarget/metrics.hpp"
 #include "kg/retarget/skeleton_map.hpp"
 
 namespace fs = std::filesystem;
@@ -30,16 +31,6 @@ Motion load(const fs::path& p) {
   io::ImportOptions o;
   o.trim = "none";
   return io::import_motion(p.string(), "", o).motion;
-}
-
-// RMS over every joint's world position of the third difference times fps^3 (m/s^3).
-double rms_jerk(const Motion& m) {
-  const Eigen::MatrixXd p = motion::joint_world_positions(m);
-  if (p.rows() < 4) return 0;
-  const Eigen::MatrixXd j = (p.bottomRows(p.rows() - 3) - 3 * p.middleRows(2, p.rows() - 3) +
-                             3 * p.middleRows(1, p.rows() - 3) - p.topRows(p.rows() - 3)) *
-                            std::pow(m.fps, 3);
-  return std::sqrt(j.squaredNorm() / static_cast<double>(j.size()));
 }
 
 // Mean distance of the target's ankles from the adapted source's, metres.
@@ -105,8 +96,8 @@ int main(int argc, char** argv) {
     std::printf("  ankles from the adapted source: IK %.2f mm, spacetime %.2f mm\n",
                 1000 * ankle_error(r, map, r.baseline.motion), 1000 * ankle_error(r, map, out));
     std::printf("  RMS jerk: capture %.0f, IK %.0f, spacetime %.0f m/s^3 (ratio %.3f; target <= 0.5)\n",
-                rms_jerk(r.adapted), rms_jerk(r.baseline.motion), rms_jerk(out),
-                rms_jerk(out) / rms_jerk(r.baseline.motion));
+                rms_joint_jerk(r.adapted), rms_joint_jerk(r.baseline.motion), rms_joint_jerk(out),
+                rms_joint_jerk(out) / rms_joint_jerk(r.baseline.motion));
     std::printf("  worst joint-limit excess: IK %.2e, spacetime %.2e (rad or m)\n",
                 limit_excess(r.baseline.motion), limit_excess(out));
   }

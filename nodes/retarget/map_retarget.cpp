@@ -231,6 +231,14 @@ Target adapted_target(const SkeletonMap& map, std::shared_ptr<const Skeleton> so
   return skeleton_target(std::move(source_ptr), *fig, "adapted figure", notes);
 }
 
+Motion adapt_clip(const Motion& clip, const SkeletonMap& map, const Skeleton& target,
+                  std::vector<std::string>* notes) {
+  const Target adapted = adapted_target(map, clip.skeleton, target, notes);
+  Motion out = scale_translation(clip, adapted);
+  out.skeleton = adapted.skeleton;
+  return out;
+}
+
 ConstraintSet feature_constraints(const std::vector<FeaturePair>& pairs,
                                   const std::vector<Eigen::Matrix3d>& offsets, const Motion& adapted,
                                   const Skeleton& target) {
@@ -409,9 +417,7 @@ MapRetargetResult retarget_onto(const Motion& clip, const SkeletonMap& map,
   };
   MapRetargetResult out;
   auto t0 = Clock::now();
-  const Target adapted = adapted_target(map, clip.skeleton, *target, &out.notes);
-  out.adapted = scale_translation(clip, adapted);
-  out.adapted.skeleton = adapted.skeleton;
+  out.adapted = adapt_clip(clip, map, *target, &out.notes);
   out.pairs = feature_pairs(map);
   const std::vector<Eigen::Matrix3d> offsets = rest_offsets(map, out.pairs, *clip.skeleton, *target);
   out.constraints = feature_constraints(out.pairs, offsets, out.adapted, *target);

@@ -14,6 +14,7 @@
 
 #include "kg/base/json.hpp"
 #include "kg/motion/filters.hpp"
+#include "kg/motion/kinematics.hpp"
 #include "kg/motion/rotations.hpp"
 
 namespace kg::retarget {
@@ -197,6 +198,16 @@ SkateSummary foot_skate(const ConstraintSet& set, const PoseCache& poses) {
 }
 
 // ---- jerk ----
+double rms_joint_jerk(const Motion& motion) {
+  const Eigen::MatrixXd p = motion::joint_world_positions(motion);
+  const Eigen::Index n = p.rows() - 3;
+  if (n < 1) return 0;
+  const Eigen::MatrixXd j =
+      (p.bottomRows(n) - 3 * p.middleRows(2, n) + 3 * p.middleRows(1, n) - p.topRows(n)) *
+      std::pow(motion.fps, 3);
+  return std::sqrt(j.squaredNorm() / static_cast<double>(j.size()));
+}
+
 JerkFigures rms_jerk(const Motion& motion) {
   motion.check();
   return jerk_of(motion, [&](int c) -> Eigen::VectorXd {

@@ -251,7 +251,6 @@ class Pass {
     return w;
   }
   bool has_soft() const { return has_soft_; }
-  bool row_soft(int row) const { return soft_[static_cast<std::size_t>(row)] != 0; }
   int active_count() const {
     int n = 0;
     for (int i = 0; i < rows_total_; ++i) n += row_active(i) ? 1 : 0;

@@ -12,8 +12,8 @@
 #include "kg/io/motion_format.hpp"
 #include "kg/motion/kinematics.hpp"
 #include "kg/retarget/constraint_kinds.hpp"
-#include "kg/retarget/initial_estimate.hpp"
 #include "kg/retarget/map_retarget.hpp"
+#include "kg/retarget/metrics.hpp"
 #include "kg/retarget/per_frame_ik.hpp"
 #include "kg/retarget/spacetime.hpp"
 #include "kg/retarget/target.hpp"
@@ -53,9 +53,7 @@ struct Adapted {
 Adapted adapt(const Motion& clip, const Skeleton& target) {
   Adapted a;
   a.map = propose_map(*clip.skeleton, target).map;
-  const Target t = adapted_target(a.map, clip.skeleton, target, &a.notes);
-  a.motion = scale_translation(clip, t);
-  a.motion.skeleton = t.skeleton;
+  a.motion = adapt_clip(clip, a.map, target, &a.notes);
   return a;
 }
 
@@ -80,6 +78,28 @@ Solved solve_on(const Motion& clip, const Motion& robot) {
   s.ik = std::move(r.baseline);
   s.st = std::move(r.solve);
   return s;
+}
+
+// CMU 07_05.amc onto the G1, solved once for the tests that read it; null (said) without the data.
+struct WalkOnG1 {
+  Motion clip, robot;
+  Solved solved;
+};
+const WalkOnG1* walk_on_g1() {
+  const fs::path amc = kData / "cmu/asf_amc/07_05.amc";
+  const fs::path g1 = kData / "robots/unitree_g1/g1_29dof.urdf";
+  if (!fs::exists(amc) || !fs::exists(g1)) {
+    WARN("skipped: " << amc << " or " << g1 << " not found");
+    return nullptr;
+  }
+  static const WalkOnG1 walk = [&] {
+    WalkOnG1 w;
+    w.clip = load(amc);
+    w.robot = load(g1);
+    w.solved = solve_on(w.clip, w.robot);
+    return w;
+  }();
+  return &walk;
 }
 
 // The same clip in a Z-up file: file coordinates turned by Q = Rx(90 deg), file_to_world turned
@@ -148,15 +168,10 @@ TEST_CASE("chain factors give the source the target's chain lengths", "[map_reta
 }
 
 TEST_CASE("per-frame IK on the map moves the G1 after CMU 07_05", "[map_retarget]") {
-  const fs::path amc = kData / "cmu/asf_amc/07_05.amc";
-  const fs::path g1 = kData / "robots/unitree_g1/g1_29dof.urdf";
-  if (!fs::exists(amc) || !fs::exists(g1)) {
-    WARN("skipped: " << amc << " or " << g1 << " not found");
-    return;
-  }
-  const Motion clip = load(amc);
-  const Motion robot = load(g1);
-  const Solved s = solve_on(clip, robot);
+  const WalkOnG1* w = walk_on_g1();
+  if (!w) return;
+  const Motion& robot = w->robot;
+  const Solved& s = w->solved;
   const Adapted& a = s.adapted;
   // The orientation pairs (pelvis, chest, head, both feet) give 2 constraints each.
   REQUIRE(s.feature_count == static_cast<int>(s.pairs.size()) + 5);
@@ -223,16 +238,6 @@ TEST_CASE("the robot's motion is the same when the source clip is turned Z up", 
   CHECK((a.ik.motion.values - b.ik.motion.values).cwiseAbs().maxCoeff() < 1e-5);
 }
 
-// RMS over every joint's world position of the third difference times fps^3 (m/s^3).
-double rms_jerk(const Motion& m) {
-  const Eigen::MatrixXd p = motion::joint_world_positions(m);
-  if (p.rows() < 4) return 0;
-  const Eigen::MatrixXd j = (p.bottomRows(p.rows() - 3) - 3 * p.middleRows(2, p.rows() - 3) +
-                             3 * p.middleRows(1, p.rows() - 3) - p.topRows(p.rows() - 3)) *
-                            std::pow(m.fps, 3);
-  return std::sqrt(j.squaredNorm() / static_cast<double>(j.size()));
-}
-
 // Mean distance of the target's ankles from the adapted source's.
 double ankle_error(const Adapted& a, const Motion& on_robot) {
   const Skeleton& rk = *on_robot.skeleton;
@@ -251,24 +256,18 @@ double ankle_error(const Adapted& a, const Motion& on_robot) {
 }
 
 TEST_CASE("the spacetime solve on the map: as close as the per-frame IK, smoother", "[map_retarget]") {
-  const fs::path amc = kData / "cmu/asf_amc/07_05.amc";
-  const fs::path g1 = kData / "robots/unitree_g1/g1_29dof.urdf";
-  if (!fs::exists(amc) || !fs::exists(g1)) {
-    WARN("skipped: " << amc << " or " << g1 << " not found");
-    return;
-  }
-  const Motion clip = load(amc);
-  const Motion robot = load(g1);
-  const Solved s = solve_on(clip, robot);
+  const WalkOnG1* w = walk_on_g1();
+  if (!w) return;
+  const Solved& s = w->solved;
   const SpacetimeResult& r = s.st;
   INFO(r.message);
   REQUIRE(r.converged());  // the joint limits hold; every feature is soft
   const Motion& out = r.motions.front();
   REQUIRE(out.values.allFinite());
   const double e_ik = ankle_error(s.adapted, s.ik.motion), e_st = ankle_error(s.adapted, out);
-  const double j_ik = rms_jerk(s.ik.motion), j_st = rms_jerk(out);
-  INFO("source RMS jerk " << rms_jerk(s.adapted.motion) << "; ankles: IK " << e_ik << " m, spacetime " << e_st
-                          << " m; RMS jerk: IK " << j_ik << ", spacetime " << j_st << " m/s^3; "
+  const double j_ik = rms_joint_jerk(s.ik.motion), j_st = rms_joint_jerk(out);
+  INFO("source RMS jerk " << rms_joint_jerk(s.adapted.motion) << "; ankles: IK " << e_ik << " m, spacetime "
+                          << e_st << " m; RMS jerk: IK " << j_ik << ", spacetime " << j_st << " m/s^3; "
                           << r.iterations << " iterations, " << r.seconds << " s");
   // Measured: ankles 4.81 mm (IK) and 4.83 mm; RMS jerk 4720 (IK; the capture's own is 5288) and
   // 362 m/s^3.

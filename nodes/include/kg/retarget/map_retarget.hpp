@@ -4,9 +4,7 @@
 // its adapted source feature, in least squares where the target cannot follow exactly (the
 // paper's "best matching motion").
 //
-//   Target adapted = adapted_target(map, clip.skeleton, target_skeleton, &notes);
-//   motion::Motion a = scale_translation(clip, adapted);                    // initial_estimate.hpp
-//   a.skeleton = adapted.skeleton;                                          // the adapted figure
+//   motion::Motion a = adapt_clip(clip, map, target_skeleton, &notes);     // on the adapted figure
 //   ConstraintSet features = feature_constraints(pairs, offsets, a, target_skeleton);
 //   motion::Motion start = placed_rest_pose(map, offsets_of_pelvis, a, target_ptr);
 //   PerFrameIkResult baseline = solve_per_frame_ik(start, features, kinds);  // per_frame_ik.hpp
@@ -53,6 +51,11 @@ namespace kg::retarget {
 // chains give no left (body_frame).
 Target adapted_target(const SkeletonMap& map, std::shared_ptr<const motion::Skeleton> source,
                       const motion::Skeleton& target, std::vector<std::string>* notes = nullptr);
+
+// The clip on the adapted figure: adapted_target, then scale_translation (initial_estimate.hpp)
+// with the result on the figure's skeleton (same joints and channels as the clip's).
+motion::Motion adapt_clip(const motion::Motion& clip, const SkeletonMap& map, const motion::Skeleton& target,
+                          std::vector<std::string>* notes = nullptr);
 
 // The constraints that make the target follow the adapted source, one per feature pair and,
 // per frame of `adapted` (on the adapted figure: same joints as map.source), one sample whose

@@ -97,6 +97,10 @@ struct JerkFigures {
   int samples = 0;  // third differences per channel: frames - 3 (0 below 4 frames)
 };
 JerkFigures rms_jerk(const motion::Motion& motion);
+// RMS over every joint origin's world position of the third difference times fps^3 (m/s^3; 0
+// below 4 frames): unlike the channels' jerk it compares motions of different structures (a
+// capture and a robot).
+double rms_joint_jerk(const motion::Motion& motion);
 // Jerk of the displacement result - reference (same frame count and channel layout, else
 // std::invalid_argument).
 JerkFigures rms_jerk_of_displacement(const motion::Motion& result, const motion::Motion& reference);
